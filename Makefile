@@ -1,0 +1,39 @@
+# The whole set-up on a fresh machine: `make run` and `make test` both bootstrap .venv.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+PIP := $(BIN)/pip install --constraint constraints.txt
+STAMP := $(VENV)/.installed
+LIBUSB := /usr/lib/x86_64-linux-gnu/libusb-1.0.so.0 /usr/lib/aarch64-linux-gnu/libusb-1.0.so.0
+
+.PHONY: run test test-quick system-deps clean
+
+run: $(STAMP)
+	$(BIN)/homebot run --seed 0
+
+test: $(STAMP)
+	$(BIN)/python -m pytest
+
+test-quick: $(STAMP)
+	$(BIN)/python -m pytest -m "not slow"
+
+$(STAMP): pyproject.toml constraints.txt | system-deps
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(PIP) --quiet -e '.[test]'
+	touch $(STAMP)
+
+# open3d needs libusb-1.0 at import time; install it when root, else say exactly what to run.
+system-deps:
+	@if ! ls $(LIBUSB) >/dev/null 2>&1 && ! ldconfig -p 2>/dev/null | grep -q libusb-1.0.so.0; then \
+		if [ "$$(id -u)" = "0" ]; then \
+			echo "installing libusb-1.0-0 (open3d needs it)"; \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libusb-1.0-0; \
+		else \
+			echo "open3d needs the system library libusb-1.0; run: sudo apt-get install -y libusb-1.0-0" >&2; \
+			exit 1; \
+		fi; \
+	fi
+
+clean:
+	rm -rf $(VENV) runs build *.egg-info

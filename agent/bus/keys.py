@@ -1,0 +1,63 @@
+"""Key expressions of the bus, all under one namespace per run (``homebot/<run-id>`` by default).
+
+============================================  =====================================================
+key                                           what travels there
+============================================  =====================================================
+``<ns>/world/cmd/<verb>``                     queryable: a command to the world, answered by a reply
+``<ns>/world/robot/description``              queryable: the robot model and camera parameters
+``<ns>/world/alive``                          liveliness token, present while the world serves
+``<ns>/agent/tree``                           publication: a tree snapshot per tick (JSON)
+``<ns>/agent/events``                         publication: episode events (JSON)
+============================================  =====================================================
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+_NAMESPACE = re.compile(r"^[A-Za-z0-9_\-]+(/[A-Za-z0-9_\-]+)*$")
+
+WORLD_VERBS = ("reset", "observe", "move_base")
+
+
+def check_namespace(namespace: str) -> str:
+    """Return ``namespace`` if it is a plain key prefix (no wildcards, no empty chunks)."""
+    if not _NAMESPACE.match(namespace):
+        raise ValueError(
+            f"namespace: {namespace!r} must be chunks of letters, digits, '_' or '-' joined by '/'"
+        )
+    return namespace
+
+
+@dataclass(frozen=True)
+class Keys:
+    """The key expressions of one run."""
+
+    namespace: str
+
+    def __post_init__(self) -> None:
+        check_namespace(self.namespace)
+
+    def world_cmd(self, verb: str) -> str:
+        return f"{self.namespace}/world/cmd/{verb}"
+
+    @property
+    def world_description(self) -> str:
+        return f"{self.namespace}/world/robot/description"
+
+    @property
+    def world_alive(self) -> str:
+        return f"{self.namespace}/world/alive"
+
+    @property
+    def agent_tree(self) -> str:
+        return f"{self.namespace}/agent/tree"
+
+    @property
+    def agent_events(self) -> str:
+        return f"{self.namespace}/agent/events"
+
+
+#: What `homebot watch` subscribes to when no namespace is given: every run's snapshots.
+ANY_AGENT_TREE = "**/agent/tree"

@@ -1,0 +1,49 @@
+"""Knowing whether the world is still there, from its Zenoh liveliness token."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import zenoh
+
+
+class LivenessWatch:
+    """Follows one liveliness token; `gone` gives a reason once the token has been seen and lost."""
+
+    def __init__(self, session: zenoh.Session, key: str) -> None:
+        self.key = key
+        self._lock = threading.Lock()
+        self._alive = False
+        self._lost_at: float | None = None
+        self._subscriber = session.liveliness().declare_subscriber(key, self._on_sample, history=True)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        with self._lock:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._alive, self._lost_at = True, None
+            else:
+                self._alive, self._lost_at = False, time.monotonic()
+
+    @property
+    def alive(self) -> bool:
+        with self._lock:
+            return self._alive
+
+    def gone(self) -> str | None:
+        with self._lock:
+            if self._lost_at is None:
+                return None
+        return f"the world process is gone (its liveliness token {self.key} was dropped)"
+
+    def wait_alive(self, timeout_s: float) -> bool:
+        """Wait until the token is present, at most ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if self.alive:
+                return True
+            time.sleep(0.01)
+        return self.alive
+
+    def close(self) -> None:
+        self._subscriber.undeclare()
