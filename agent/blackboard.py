@@ -1,0 +1,12 @@
+"""Names of the blackboard keys the EQA tree shares, in one place so behaviours agree on them."""
+
+QUESTION = "question"  # str
+CHOICES = "choices"  # list[str], four of them, padded
+BUDGET = "budget"  # int, steps
+OBSERVATION = "observation"  # agent.observation.Observation, the newest frame
+MAP = "map"  # agent.mapping.occupancy.ExplorationMap
+ANSWER_LOG = "answer_log"  # agent.eqa.answers.AnswerLog
+PLAN = "plan"  # agent.planning.explore.MovePlan, the next move
+TRAJECTORY = "trajectory"  # list[tuple[float, float, float]], every base pose reached
+EXPLORATION_COMPLETE = "exploration_complete"  # bool, no reachable frontier is left
+ANSWER = "answer"  # dict, written once when the episode answers

@@ -1,0 +1,133 @@
+"""One typed configuration with defaults, overridable from a TOML file and from the command line.
+
+Every value is checked against the type of its default, and a bad one is rejected with its full
+dotted name, e.g. ``config: map.resolution: expected a number, got 'fine'``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import tomllib
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from agent.mapping.occupancy import OccupancyConfig
+from agent.planning.explore import ExploreConfig
+from agent.vlm.sim import SimParams
+
+
+class ConfigError(ValueError):
+    """A configuration value or file that cannot be used; the text names the key."""
+
+
+@dataclass(frozen=True)
+class CameraSettings:
+    width: int = 320
+    height: int = 240
+    hfov_deg: float = 90.0
+
+
+@dataclass(frozen=True)
+class BusSettings:
+    listen: tuple[str, ...] = ("tcp/127.0.0.1:7450",)
+    query_timeout_s: float = 10.0
+    move_timeout_s: float = 30.0
+    world_start_timeout_s: float = 60.0
+
+
+@dataclass(frozen=True)
+class EpisodeSettings:
+    budget: int = 0  # 0: the scenario's own budget, int(3·sqrt(area))
+    max_seconds: float = 900.0
+    tick_period_s: float = 0.002
+    vlm_timeout_s: float = 30.0
+
+
+@dataclass(frozen=True)
+class Config:
+    camera: CameraSettings = field(default_factory=CameraSettings)
+    bus: BusSettings = field(default_factory=BusSettings)
+    episode: EpisodeSettings = field(default_factory=EpisodeSettings)
+    map: OccupancyConfig = field(default_factory=OccupancyConfig)
+    explore: ExploreConfig = field(default_factory=ExploreConfig)
+    vlm: SimParams = field(default_factory=SimParams)
+
+
+def load_config(path: Path | None = None, overrides: list[str] | None = None) -> Config:
+    """Defaults, then the TOML file at ``path``, then ``key=value`` overrides (values in JSON or bare)."""
+    config = Config()
+    if path is not None:
+        try:
+            data = tomllib.loads(Path(path).read_text())
+        except (OSError, tomllib.TOMLDecodeError) as error:
+            raise ConfigError(f"config file {path}: {error}") from None
+        config = merge(config, data)
+    for item in overrides or []:
+        key, sep, raw = item.partition("=")
+        if not sep or not key:
+            raise ConfigError(f"config override {item!r}: expected key=value, e.g. map.resolution=0.05")
+        config = merge(config, _nest(key.strip().split("."), _parse_value(raw.strip())))
+    return config
+
+
+def merge(config: Any, data: dict[str, Any], prefix: str = "") -> Any:
+    """A copy of the dataclass ``config`` with ``data`` applied, each value type-checked."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"config: {prefix.rstrip('.') or 'top level'}: expected a table")
+    fields = {f.name: f for f in dataclasses.fields(config)}
+    hints = typing.get_type_hints(type(config))
+    changes = {}
+    for key, value in data.items():
+        name = f"{prefix}{key}"
+        if key not in fields:
+            raise ConfigError(f"config: unknown key {name} (known here: {', '.join(sorted(fields))})")
+        current = getattr(config, key)
+        if dataclasses.is_dataclass(current):
+            changes[key] = merge(current, value, f"{name}.")
+        else:
+            changes[key] = _coerce(name, value, hints[key])
+    try:
+        return dataclasses.replace(config, **changes)
+    except ValueError as error:
+        raise ConfigError(f"config: {error}") from None
+
+
+def _coerce(name: str, value: Any, hint: Any) -> Any:
+    origin = typing.get_origin(hint)
+    if hint is bool:
+        if isinstance(value, bool):
+            return value
+    elif hint is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif hint is float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+    elif hint is str:
+        if isinstance(value, str):
+            return value
+    elif origin is tuple:
+        args = typing.get_args(hint)
+        if isinstance(value, (list, tuple)):
+            if len(args) == 2 and args[1] is Ellipsis:
+                return tuple(_coerce(f"{name}[{i}]", v, args[0]) for i, v in enumerate(value))
+            if len(value) == len(args):
+                return tuple(_coerce(f"{name}[{i}]", v, a) for i, (v, a) in enumerate(zip(value, args)))
+    type_name = getattr(hint, "__name__", str(hint)).replace("float", "number")
+    raise ConfigError(f"config: {name}: expected {type_name}, got {value!r}")
+
+
+def _parse_value(raw: str) -> Any:
+    try:
+        return json.loads(raw)
+    except json.JSONDecodeError:
+        return raw
+
+
+def _nest(keys: list[str], value: Any) -> dict[str, Any]:
+    for key in reversed(keys):
+        value = {key: value}
+    return value

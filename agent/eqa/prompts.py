@@ -1,0 +1,50 @@
+"""The prompts of Explore until Confident (§III, §V), and reading them back.
+
+Prompts are plain text so any VLM backend can take them; the simulator reads the question and the
+choices back out of the same text, as a real model would.
+"""
+
+from __future__ import annotations
+
+import re
+
+from worlds.vocabulary import LETTERS
+
+ANSWER_SUFFIX = "Answer with the option's letter from the given choices directly."
+RELEVANCE_TEMPLATE = (
+    "Consider the question: '{question}'. Are you confident about answering the question with the "
+    "current view? Answer with Yes or No."
+)
+YES_NO = ("Yes", "No")
+
+_CHOICE_LINE = re.compile(r"^([A-D])\. (.*)$")
+_QUOTED = re.compile(r"Consider the question: '(.*)'[.,]")
+
+
+def answer_prompt(question: str, choices: list[str]) -> str:
+    lines = [question] + [f"{letter}. {choice}" for letter, choice in zip(LETTERS, choices)]
+    return "\n".join(lines + [ANSWER_SUFFIX])
+
+
+def relevance_prompt(question: str) -> str:
+    return RELEVANCE_TEMPLATE.format(question=question)
+
+
+def read_answer_prompt(prompt: str) -> tuple[str, dict[str, str]] | None:
+    """(question, {letter: choice}) from an answer prompt, None if it is not one."""
+    lines = prompt.strip().split("\n")
+    if len(lines) < 3 or lines[-1] != ANSWER_SUFFIX:
+        return None
+    choices = {}
+    for line in lines[1:-1]:
+        match = _CHOICE_LINE.match(line)
+        if not match:
+            return None
+        choices[match.group(1)] = match.group(2)
+    return lines[0], choices
+
+
+def read_quoted_question(prompt: str) -> str | None:
+    """The question inside "Consider the question: '...'" prompts."""
+    match = _QUOTED.search(prompt)
+    return match.group(1) if match else None

@@ -1,0 +1,59 @@
+"""A 2D grid laid over the floor: cell indices <-> world coordinates.
+
+Arrays are indexed ``[row, col]`` with rows along +y and columns along +x, so ``grid[iy, ix]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class GridSpec:
+    """Where a grid lies: the world (x, y) of cell (0, 0)'s lower-left corner, the cell size, the shape."""
+
+    origin_xy: tuple[float, float]
+    resolution: float
+    shape: tuple[int, int]  # (rows, cols)
+
+    @classmethod
+    def centred(cls, centre_xy: tuple[float, float], size_m: float, resolution: float) -> GridSpec:
+        cells = int(np.ceil(size_m / resolution))
+        half = cells * resolution / 2
+        return cls((centre_xy[0] - half, centre_xy[1] - half), resolution, (cells, cells))
+
+    def to_cell(self, xy: np.ndarray) -> np.ndarray:
+        """World (..., 2) points -> integer (..., 2) cells as (row, col); may fall outside the grid."""
+        xy = np.asarray(xy, dtype=float)
+        col = np.floor((xy[..., 0] - self.origin_xy[0]) / self.resolution)
+        row = np.floor((xy[..., 1] - self.origin_xy[1]) / self.resolution)
+        return np.stack([row, col], axis=-1).astype(int)
+
+    def to_world(self, cells: np.ndarray) -> np.ndarray:
+        """Integer (..., 2) cells as (row, col) -> world (..., 2) cell centres as (x, y)."""
+        cells = np.asarray(cells, dtype=float)
+        x = self.origin_xy[0] + (cells[..., 1] + 0.5) * self.resolution
+        y = self.origin_xy[1] + (cells[..., 0] + 0.5) * self.resolution
+        return np.stack([x, y], axis=-1)
+
+    def inside(self, cells: np.ndarray) -> np.ndarray:
+        cells = np.asarray(cells)
+        return (
+            (cells[..., 0] >= 0)
+            & (cells[..., 0] < self.shape[0])
+            & (cells[..., 1] >= 0)
+            & (cells[..., 1] < self.shape[1])
+        )
+
+    def disc(self, centre_xy: tuple[float, float], radius_m: float) -> np.ndarray:
+        """A boolean grid that is true on cells whose centre lies within ``radius_m`` of the point."""
+        rows, cols = np.indices(self.shape)
+        centres = self.to_world(np.stack([rows, cols], axis=-1))
+        return np.hypot(centres[..., 0] - centre_xy[0], centres[..., 1] - centre_xy[1]) <= radius_m
+
+    def extent(self) -> tuple[float, float, float, float]:
+        """(xmin, xmax, ymin, ymax), for plotting."""
+        x0, y0 = self.origin_xy
+        return (x0, x0 + self.shape[1] * self.resolution, y0, y0 + self.shape[0] * self.resolution)

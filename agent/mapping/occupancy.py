@@ -1,0 +1,94 @@
+"""The 2D maps the planners use, derived from the TSDF and the camera's narrow view.
+
+- occupied: a column holds a surface voxel between ``obstacle_min_z`` and the robot's height;
+- floor seen: a column holds a surface voxel at floor height;
+- free: floor seen and not occupied, or near a pose the robot has stood on;
+- explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from agent.mapping.camera import Intrinsics, back_project, narrow_view_mask
+from agent.mapping.grid import GridSpec
+from agent.mapping.tsdf import TsdfConfig, TsdfMap, Voxels
+
+
+@dataclass(frozen=True)
+class OccupancyConfig:
+    """Heights and thresholds of the 2D projection, in metres unless said otherwise."""
+
+    size_m: float = 32.0
+    resolution: float = 0.1
+    floor_band: tuple[float, float] = (-0.12, 0.08)
+    obstacle_min_z: float = 0.12
+    obstacle_max_z: float = 1.6
+    surface_tsdf: float = 0.3  # |normalised TSDF| below this is a surface voxel
+    robot_radius: float = 0.25
+    near_field_radius: float = 1.0  # floor the head camera cannot see around a pose it stood on
+    tsdf: TsdfConfig = field(default_factory=TsdfConfig)
+
+
+def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> tuple[np.ndarray, np.ndarray]:
+    """(floor_seen, occupied) boolean grids from the observed surface voxels."""
+    surface = np.abs(voxels.tsdf) < config.surface_tsdf
+    points = voxels.points[surface]
+    cells = spec.to_cell(points[:, :2])
+    inside = spec.inside(cells)
+    points, cells = points[inside], cells[inside]
+    z = points[:, 2]
+    floor_seen = np.zeros(spec.shape, dtype=bool)
+    occupied = np.zeros(spec.shape, dtype=bool)
+    at_floor = (z >= config.floor_band[0]) & (z <= config.floor_band[1])
+    floor_seen[cells[at_floor, 0], cells[at_floor, 1]] = True
+    obstacle = (z >= config.obstacle_min_z) & (z <= config.obstacle_max_z)
+    occupied[cells[obstacle, 0], cells[obstacle, 1]] = True
+    return floor_seen, occupied
+
+
+class ExplorationMap:
+    """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids."""
+
+    def __init__(self, start_xy: tuple[float, float], config: OccupancyConfig = OccupancyConfig()) -> None:
+        self.config = config
+        self.spec = GridSpec.centred(start_xy, config.size_m, config.resolution)
+        self.tsdf = TsdfMap(config.tsdf)
+        self.explored = np.zeros(self.spec.shape, dtype=bool)
+        self.stood = np.zeros(self.spec.shape, dtype=bool)
+        self.floor_seen = np.zeros(self.spec.shape, dtype=bool)
+        self.occupied = np.zeros(self.spec.shape, dtype=bool)
+
+    def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
+                  robot_xy: tuple[float, float]) -> None:
+        """Fuse one frame taken with the robot at ``robot_xy``."""
+        self.tsdf.integrate(depth, intrinsics, camera_to_world)
+        self.floor_seen, self.occupied = project_columns(self.spec, self.tsdf.voxels(), self.config)
+        self.stood |= self.spec.disc(robot_xy, self.config.near_field_radius)
+        narrow = back_project(depth, intrinsics, camera_to_world, narrow_view_mask(*depth.shape))
+        cells = self.spec.to_cell(narrow[:, :2])
+        cells = cells[self.spec.inside(cells)]
+        self.explored[cells[:, 0], cells[:, 1]] = True
+        self.explored |= self.spec.disc(robot_xy, self.config.robot_radius)
+
+    @property
+    def free(self) -> np.ndarray:
+        return (self.floor_seen | self.stood) & ~self.occupied
+
+    def traversable(self) -> np.ndarray:
+        """Free cells where the robot's disc touches no occupied cell."""
+        radius_cells = int(np.ceil(self.config.robot_radius / self.spec.resolution))
+        footprint = _disc_kernel(radius_cells)
+        blocked = ndimage.binary_dilation(self.occupied, structure=footprint)
+        return self.free & ~blocked
+
+    def free_area_m2(self) -> float:
+        return float(self.free.sum()) * self.spec.resolution**2
+
+
+def _disc_kernel(radius_cells: int) -> np.ndarray:
+    offsets = np.arange(-radius_cells, radius_cells + 1)
+    return np.hypot(*np.meshgrid(offsets, offsets)) <= radius_cells

@@ -1,0 +1,73 @@
+"""Choosing where to go next: frontiers reachable from the robot, and a path to one of them."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from agent.mapping.occupancy import ExplorationMap
+from agent.planning.frontier import Frontier, cluster_frontiers, frontier_cells
+from agent.planning.paths import DistanceField, distance_field, simplify_path, truncate_path
+
+
+@dataclass(frozen=True)
+class ExploreConfig:
+    max_step_m: float = 3.0  # path length the robot may drive between two observations
+    min_frontier_distance_m: float = 1.0  # nearer frontiers are where the robot already stands
+    min_frontier_size: int = 3
+    min_unexplored_neighbours: int = 2
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """The frontiers the robot can reach now, with the path lengths to their centres."""
+
+    frontiers: list[Frontier]
+    distances_m: np.ndarray
+    field: DistanceField
+
+
+@dataclass(frozen=True)
+class MovePlan:
+    """One step: the waypoints to drive (world x, y), the heading at the end, and why."""
+
+    path_xy: np.ndarray
+    yaw: float
+    frontier: Frontier
+    goal_distance_m: float
+
+
+def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float],
+                        config: ExploreConfig = ExploreConfig()) -> Candidates:
+    """Frontier clusters in the free space connected to the robot, nearer ones dropped."""
+    spec = world_map.spec
+    start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
+    field = distance_field(spec, world_map.traversable(), start)
+    reachable = np.isfinite(field.metres)
+    mask = frontier_cells(reachable, world_map.explored, world_map.occupied, config.min_unexplored_neighbours)
+    frontiers = cluster_frontiers(spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)
+    distances = np.array([field.metres[f.centre] for f in frontiers])
+    keep = distances >= config.min_frontier_distance_m
+    return Candidates([f for f, k in zip(frontiers, keep) if k], distances[keep], field)
+
+
+def nearest_frontier(candidates: Candidates) -> int | None:
+    """Plain FBE: the index of the frontier with the shortest path, None when there is none."""
+    return int(np.argmin(candidates.distances_m)) if len(candidates.frontiers) else None
+
+
+def plan_move(candidates: Candidates, index: int, config: ExploreConfig = ExploreConfig()) -> MovePlan:
+    """A path toward frontier ``index``, cut to one step, facing along the path or the frontier normal."""
+    frontier = candidates.frontiers[index]
+    field = candidates.field
+    cells = field.path_to(frontier.centre)
+    full = simplify_path(field.spec.to_world(cells))
+    path = truncate_path(full, config.max_step_m)
+    truncated = not np.allclose(path[-1], full[-1])
+    if truncated and len(path) >= 2:
+        heading = path[-1] - path[-2]
+    else:
+        heading = frontier.normal
+    return MovePlan(path, math.atan2(heading[1], heading[0]), frontier, float(candidates.distances_m[index]))

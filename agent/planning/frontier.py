@@ -1,0 +1,69 @@
+"""Frontiers: free cells on the boundary between explored and unexplored space.
+
+Plain frontier-based exploration (FBE) drives to the nearest frontier cluster. The cluster's
+normal points into the unexplored side, which is where the robot should look when it arrives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from agent.mapping.grid import GridSpec
+
+_EIGHT = np.ones((3, 3), dtype=bool)
+
+
+@dataclass(frozen=True)
+class Frontier:
+    """One frontier cluster: its cells, a representative cell, and the unit normal (x, y)."""
+
+    cells: np.ndarray  # (K, 2) rows, cols
+    centre: tuple[int, int]  # the cluster cell nearest the cluster's mean
+    normal: np.ndarray  # unit (x, y) into unexplored space
+
+    @property
+    def size(self) -> int:
+        return len(self.cells)
+
+
+def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
+                   min_unexplored_neighbours: int = 2) -> np.ndarray:
+    """Reachable cells with at least that many 8-neighbours that are unexplored and not occupied."""
+    open_unknown = (~explored & ~occupied).astype(np.int32)
+    counts = ndimage.convolve(open_unknown, _EIGHT.astype(np.int32), mode="constant", cval=0) - open_unknown
+    return reachable & (counts >= min_unexplored_neighbours)
+
+
+def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
+                      min_size: int = 3) -> list[Frontier]:
+    """Group frontier cells into 8-connected clusters of at least ``min_size`` cells."""
+    labels, count = ndimage.label(cells_mask, structure=_EIGHT)
+    open_unknown = ~explored & ~occupied
+    frontiers = []
+    for index in range(1, count + 1):
+        cells = np.argwhere(labels == index)
+        if len(cells) < min_size:
+            continue
+        mean = cells.mean(axis=0)
+        centre = tuple(int(v) for v in cells[np.argmin(np.hypot(*(cells - mean).T))])
+        frontiers.append(Frontier(cells, centre, _normal(cells, open_unknown)))
+    return frontiers
+
+
+def _normal(cells: np.ndarray, open_unknown: np.ndarray) -> np.ndarray:
+    """Mean direction from the cluster's cells to their unexplored neighbours, as unit (x, y)."""
+    rows, cols = open_unknown.shape
+    total = np.zeros(2)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr == dc == 0:
+                continue
+            r, c = cells[:, 0] + dr, cells[:, 1] + dc
+            ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+            hits = np.count_nonzero(open_unknown[r[ok], c[ok]])
+            total += hits * np.array([dc, dr]) / np.hypot(dc, dr)
+    norm = np.hypot(*total)
+    return total / norm if norm > 0 else np.array([1.0, 0.0])

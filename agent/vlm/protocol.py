@@ -1,0 +1,33 @@
+"""The one question every VLM backend answers: given an image, a prompt and the candidate tokens,
+how likely is each candidate to be the next token? Probabilities are normalised over the candidates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from agent.observation import Observation
+
+
+@dataclass(frozen=True)
+class VisualQuery:
+    observation: Observation
+    prompt: str
+    candidates: tuple[str, ...]
+
+
+class VisionLanguageModel(Protocol):
+    name: str
+
+    def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        """P(candidate) for each candidate, summing to 1."""
+        ...
+
+
+def softmax(candidates: tuple[str, ...], logits: np.ndarray) -> dict[str, float]:
+    shifted = np.exp(logits - np.max(logits))
+    probs = shifted / shifted.sum()
+    return {c: float(p) for c, p in zip(candidates, probs)}
