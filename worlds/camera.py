@@ -1,0 +1,90 @@
+"""Rendering one RGB-D frame with instance segmentation from the robot's head camera.
+
+PyBullet's depth buffer is non-linear; it is turned into metres along the optical axis with
+z = far·near / (far − (far − near)·d), and pixels at the far plane (nothing hit) become 0, meaning
+"no return". The segmentation comes back in body ids and is translated into the home's instance
+ids, so the frame speaks the same language as the labels that travel with it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+
+from worlds.robot import CameraConfig, camera_pose
+from worlds.things import Label
+
+#: Depth-buffer values this close to 1 are the far plane: no surface there.
+_FAR_PLANE = 1.0 - 1e-6
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One frame: RGB (H, W, 3) uint8, depth (H, W) float32 metres, seg (H, W) int32 instance ids."""
+
+    rgb: np.ndarray
+    depth: np.ndarray
+    seg: np.ndarray
+    labels: list[Label]
+    camera_pose: np.ndarray
+    render_ms: float
+
+
+def linear_depth(buffer: np.ndarray, near: float, far: float) -> np.ndarray:
+    """Metric z-depth from an OpenGL depth buffer; 0 where the buffer is at the far plane."""
+    d = np.asarray(buffer, dtype=np.float64)
+    z = far * near / (far - (far - near) * d)
+    return np.where(d >= _FAR_PLANE, 0.0, z).astype(np.float32)
+
+
+def _matrices(camera: CameraConfig, pose: np.ndarray) -> tuple[list[float], list[float]]:
+    eye = pose[:3, 3]
+    view = p.computeViewMatrix(eye.tolist(), (eye + pose[:3, 2]).tolist(), (-pose[:3, 1]).tolist())
+    aspect = camera.width / camera.height
+    projection = list(p.computeProjectionMatrixFOV(camera.vfov_deg, aspect, camera.near, camera.far))
+    # The tiny renderer samples each pixel at its corner (column c at u = c, row r at v = r + 1).
+    # Shifting the image half a pixel makes it sample pixel centres, so (cx, cy) = (W/2, H/2) holds.
+    projection[8] += 1.0 / camera.width
+    projection[9] += 1.0 / camera.height
+    return view, projection
+
+
+def render(
+    client: int,
+    camera: CameraConfig,
+    base_pose: tuple[float, float, float],
+    body_labels: dict[int, Label],
+) -> Observation:
+    """Render what the head camera sees from ``base_pose``; labels only for instances in the frame."""
+    pose = camera_pose(base_pose, camera)
+    view, projection = _matrices(camera, pose)
+    started = time.perf_counter()
+    _, _, rgba, depth_buffer, body_seg = p.getCameraImage(
+        camera.width,
+        camera.height,
+        view,
+        projection,
+        renderer=p.ER_TINY_RENDERER,
+        physicsClientId=client,
+    )
+    render_ms = (time.perf_counter() - started) * 1000.0
+    shape = (camera.height, camera.width)
+    rgb = np.asarray(rgba, dtype=np.uint8).reshape(*shape, 4)[..., :3].copy()
+    depth = linear_depth(np.asarray(depth_buffer).reshape(shape), camera.near, camera.far)
+    seg = _instances(np.asarray(body_seg, dtype=np.int64).reshape(shape), body_labels)
+    present = {int(i) for i in np.unique(seg) if i >= 0}
+    labels = sorted((label for label in body_labels.values() if label["id"] in present), key=lambda l: l["id"])
+    return Observation(rgb, depth, seg, labels, pose, render_ms)
+
+
+def _instances(body_seg: np.ndarray, body_labels: dict[int, Label]) -> np.ndarray:
+    """Body ids (-1 for background, or an unlabelled body) to instance ids (-1 for nothing)."""
+    lookup = np.full(max(body_labels, default=0) + 2, -1, dtype=np.int32)
+    for body, label in body_labels.items():
+        lookup[body + 1] = label["id"]
+    index = np.clip(body_seg + 1, 0, lookup.size - 1)
+    index[body_seg + 1 >= lookup.size] = 0
+    return lookup[index]

@@ -1,0 +1,84 @@
+"""Checking world command requests field by field, before anything touches the simulator.
+
+Every problem raises `RequestError` with the field's full name (``move_base.path[3]``) and what is
+wrong with it, which the command server sends back to the client as the error reply. Unknown
+fields are rejected too, so a misspelt option fails loudly instead of being ignored.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from agent.bus.rpc import RequestError
+from worlds.home import ROOM_COUNT
+
+MAX_WAYPOINTS = 500
+#: Waypoints further than this from the origin are certainly a mistake (homes are ~10 m across).
+MAX_COORDINATE_M = 1000.0
+MAX_SEED = 2**63 - 1
+
+
+def _only(meta: dict[str, Any], verb: str, allowed: tuple[str, ...]) -> None:
+    unknown = sorted(set(meta) - set(allowed))
+    if unknown:
+        expected = ", ".join(allowed) if allowed else "no fields"
+        raise RequestError(f"{verb}.{unknown[0]}: unknown field (expected {expected})")
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def parse_reset(meta: dict[str, Any]) -> tuple[int, int | None]:
+    """(seed, n_rooms) from ``{"seed": int >= 0, "n_rooms": optional int}``."""
+    _only(meta, "reset", ("seed", "n_rooms"))
+    if "seed" not in meta:
+        raise RequestError("reset.seed: missing (an integer >= 0 is required)")
+    seed = meta["seed"]
+    if not _is_int(seed):
+        raise RequestError(f"reset.seed: expected an integer, got {type(seed).__name__}")
+    if not 0 <= seed <= MAX_SEED:
+        raise RequestError(f"reset.seed: {seed} must lie in 0..{MAX_SEED}")
+    n_rooms = meta.get("n_rooms")
+    if n_rooms is not None:
+        if not _is_int(n_rooms):
+            raise RequestError(f"reset.n_rooms: expected an integer or null, got {type(n_rooms).__name__}")
+        if not ROOM_COUNT[0] <= n_rooms <= ROOM_COUNT[1]:
+            raise RequestError(f"reset.n_rooms: {n_rooms} must lie in {ROOM_COUNT[0]}..{ROOM_COUNT[1]}")
+    return seed, n_rooms
+
+
+def parse_observe(meta: dict[str, Any]) -> None:
+    _only(meta, "observe", ())
+
+
+def parse_description(meta: dict[str, Any]) -> None:
+    _only(meta, "description", ())
+
+
+def parse_move_base(meta: dict[str, Any]) -> tuple[list[tuple[float, float]], float | None]:
+    """(waypoints, final yaw or None) from ``{"path": [[x, y], ...], "yaw": optional radians}``."""
+    _only(meta, "move_base", ("path", "yaw"))
+    if "path" not in meta:
+        raise RequestError("move_base.path: missing (a list of [x, y] waypoints is required)")
+    path = meta["path"]
+    if not isinstance(path, list):
+        raise RequestError(f"move_base.path: expected a list of [x, y] waypoints, got {type(path).__name__}")
+    if not 1 <= len(path) <= MAX_WAYPOINTS:
+        raise RequestError(f"move_base.path: has {len(path)} waypoints, expected 1..{MAX_WAYPOINTS}")
+    waypoints = []
+    for index, point in enumerate(path):
+        if not (isinstance(point, list) and len(point) == 2 and all(_is_number(v) for v in point)):
+            raise RequestError(f"move_base.path[{index}]: expected [x, y] of finite numbers, got {point!r:.80}")
+        if any(abs(v) > MAX_COORDINATE_M for v in point):
+            raise RequestError(f"move_base.path[{index}]: coordinates must lie within ±{MAX_COORDINATE_M:g} m")
+        waypoints.append((float(point[0]), float(point[1])))
+    yaw = meta.get("yaw")
+    if yaw is not None and not _is_number(yaw):
+        raise RequestError(f"move_base.yaw: expected a finite number of radians or null, got {yaw!r:.80}")
+    return waypoints, None if yaw is None else float(yaw)

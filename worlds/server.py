@@ -1,0 +1,188 @@
+"""The world server: one simulated home answering commands over Zenoh.
+
+Queryables (all under ``<ns>``, see `agent.bus.keys`):
+
+- ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 3..5} -> scenario, home outline, pose
+- ``world/cmd/observe``    {} -> pose, camera, labels + arrays rgb (H,W,3 uint8), depth (H,W float32
+                           metres, 0 = no return), seg (H,W int32 instance ids, -1 = nothing)
+- ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact
+- ``world/robot/description`` {} -> robot size, camera, URDF
+
+and the liveliness token ``world/alive`` while serving. PyBullet lives in the serving thread: the
+`World` is created, used and closed there, and `CommandServer` runs every handler in that thread.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import signal
+import sys
+import threading
+from typing import Any
+
+import zenoh
+
+from agent.bus.codec import Message
+from agent.bus.keys import Keys
+from agent.bus.rpc import Arrays, CommandServer, RequestError
+from agent.bus.session import EndpointError, open_session
+from worlds import commands
+from worlds.robot import CameraConfig, description
+from worlds.sim import World
+
+log = logging.getLogger(__name__)
+
+#: The longest path one move_base may ask for; longer requests are refused, not truncated.
+MAX_PATH_M = 200.0
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+
+
+class WorldServer:
+    """Serves one `World` under a namespace. ``ready`` is set once every queryable is declared."""
+
+    def __init__(self, session: zenoh.Session, namespace: str, camera: CameraConfig | None = None) -> None:
+        self.session = session
+        self.keys = Keys(namespace)
+        self.camera = camera or CameraConfig()
+        self.ready = threading.Event()
+        self._world: World | None = None
+
+    def serve(self, stop: threading.Event, seed: int | None = None) -> None:
+        """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set."""
+        self._world = World(self.camera)
+        server = CommandServer(self.session)
+        token = None
+        try:
+            if seed is not None:
+                self._world.reset(seed)
+            server.add(self.keys.world_cmd("reset"), self._reset)
+            server.add(self.keys.world_cmd("observe"), self._observe)
+            server.add(self.keys.world_cmd("move_base"), self._move_base)
+            server.add(self.keys.world_description, self._description)
+            token = self.session.liveliness().declare_token(self.keys.world_alive)
+            self.ready.set()
+            log.info("world serving under %s", self.keys.namespace)
+            server.serve(stop)
+        finally:
+            if token is not None:
+                token.undeclare()
+            server.close()
+            self._world.close()
+            self._world = None
+            log.info("world under %s stopped", self.keys.namespace)
+
+    def _built(self, verb: str) -> World:
+        assert self._world is not None  # handlers only run inside serve()
+        if self._world.home is None:
+            raise RequestError(f"{verb}: no home yet; send reset first")
+        return self._world
+
+    def _reset(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        seed, n_rooms = commands.parse_reset(request.meta)
+        assert self._world is not None
+        scenario = self._world.reset(seed, n_rooms)
+        home = self._world.home
+        assert home is not None
+        return {
+            "scenario": scenario.to_dict(),
+            "home": {
+                "area_m2": home.area_m2,
+                "bounds": list(home.bounds),
+                "rooms": [{"name": room.name, "polygon": room.polygon} for room in home.rooms],
+            },
+            "base_pose": list(self._world.base_pose),
+        }, {}
+
+    def _observe(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        commands.parse_observe(request.meta)
+        world = self._built("observe")
+        frame = world.observe()
+        meta = {
+            "base_pose": list(world.base_pose),
+            "camera": self.camera.to_dict(),
+            "camera_pose": frame.camera_pose.tolist(),
+            "labels": frame.labels,
+            "render_ms": frame.render_ms,
+            "observation": world.observations,
+        }
+        return meta, {"rgb": frame.rgb, "depth": frame.depth, "seg": frame.seg}
+
+    def _move_base(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        path, yaw = commands.parse_move_base(request.meta)
+        world = self._built("move_base")
+        x, y, _ = world.base_pose
+        length = sum(math.dist(a, b) for a, b in zip([(x, y), *path], path))
+        if length > MAX_PATH_M:
+            raise RequestError(f"move_base.path: {length:.1f} m long, more than the {MAX_PATH_M:g} m allowed")
+        result = world.move_base(path, yaw)
+        return {
+            "base_pose": list(result.base_pose),
+            "reached": result.reached,
+            "contact": result.contact,
+            "contact_point": list(result.contact_point) if result.contact_point else None,
+            "travelled_m": result.travelled_m,
+        }, {}
+
+    def _description(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        commands.parse_description(request.meta)
+        return description(self.camera), {}
+
+
+def run_world(
+    namespace: str,
+    listen: list[str],
+    connect: list[str],
+    camera: CameraConfig,
+    seed: int | None,
+    stop: threading.Event,
+) -> None:
+    """Open a session on the given endpoints and serve a world until ``stop`` is set."""
+    session = open_session(listen, connect)
+    try:
+        WorldServer(session, namespace, camera).serve(stop, seed)
+    finally:
+        session.close()
+
+
+def _parser() -> argparse.ArgumentParser:
+    defaults = CameraConfig()
+    parser = argparse.ArgumentParser(prog="homebot world", description="Serve a simulated home over Zenoh.")
+    parser.add_argument("--namespace", default="homebot/default", help="key prefix of this run")
+    parser.add_argument(
+        "--listen", action="append", help=f"endpoint to listen on (repeatable; default {DEFAULT_LISTEN})"
+    )
+    parser.add_argument("--connect", action="append", default=[], help="endpoint to connect to (repeatable)")
+    parser.add_argument("--seed", type=int, help="reset to this home at start")
+    parser.add_argument("--width", type=int, default=defaults.width, help="camera width in pixels")
+    parser.add_argument("--height", type=int, default=defaults.height, help="camera height in pixels")
+    parser.add_argument("--hfov", type=float, default=defaults.hfov_deg, help="horizontal field of view, degrees")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry: serve until SIGTERM or SIGINT. Returns the process exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        camera = CameraConfig(width=args.width, height=args.height, hfov_deg=args.hfov)
+        Keys(args.namespace)
+    except ValueError as error:
+        parser.error(str(error))
+    if args.seed is not None and args.seed < 0:
+        parser.error(f"--seed: {args.seed} must not be negative")
+    logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    stop = threading.Event()
+    for signum in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(signum, lambda *_: stop.set())
+    try:
+        run_world(args.namespace, args.listen or [DEFAULT_LISTEN], args.connect, camera, args.seed, stop)
+    except EndpointError as error:
+        log.error("%s", error)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
