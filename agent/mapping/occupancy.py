@@ -3,7 +3,12 @@
 - occupied: a column holds a surface voxel between ``obstacle_min_z`` and the robot's height;
 - floor seen: a column holds a surface voxel at floor height;
 - free: floor seen and not occupied, or near a pose the robot has stood on;
-- explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows).
+- explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows), or
+  near a pose the robot has stood on.
+
+"Near a pose" is the head camera's blind zone (``near_field_radius``): the floor closer than the
+lower edge of the image is never in view, yet the robot has just been there. Counting it as free
+and explored lets frontiers form at its edge, so a robot that starts facing a wall turns away.
 """
 
 from __future__ import annotations
@@ -61,34 +66,50 @@ class ExplorationMap:
         self.stood = np.zeros(self.spec.shape, dtype=bool)
         self.floor_seen = np.zeros(self.spec.shape, dtype=bool)
         self.occupied = np.zeros(self.spec.shape, dtype=bool)
+        self.bumped = np.zeros(self.spec.shape, dtype=bool)
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
                   robot_xy: tuple[float, float]) -> None:
         """Fuse one frame taken with the robot at ``robot_xy``."""
         self.tsdf.integrate(depth, intrinsics, camera_to_world)
-        self.floor_seen, self.occupied = project_columns(self.spec, self.tsdf.voxels(), self.config)
-        self.stood |= self.spec.disc(robot_xy, self.config.near_field_radius)
+        self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), self.config)
+        self.occupied = occupied | self.bumped
+        self.stood |= self.spec.disc(robot_xy, self.config.near_field_radius) & ~self.occupied
         narrow = back_project(depth, intrinsics, camera_to_world, narrow_view_mask(*depth.shape))
         cells = self.spec.to_cell(narrow[:, :2])
         cells = cells[self.spec.inside(cells)]
         self.explored[cells[:, 0], cells[:, 1]] = True
-        self.explored |= self.spec.disc(robot_xy, self.config.robot_radius)
+        self.explored |= self.stood
+
+    def mark_contact(self, point_xy: tuple[float, float]) -> None:
+        """Record an obstacle the robot touched but may never have seen (too low, too near)."""
+        self.bumped |= self.spec.disc(point_xy, self.spec.resolution)
+        self.occupied |= self.bumped
 
     @property
     def free(self) -> np.ndarray:
         return (self.floor_seen | self.stood) & ~self.occupied
 
-    def traversable(self) -> np.ndarray:
-        """Free cells where the robot's disc touches no occupied cell."""
-        radius_cells = int(np.ceil(self.config.robot_radius / self.spec.resolution))
-        footprint = _disc_kernel(radius_cells)
-        blocked = ndimage.binary_dilation(self.occupied, structure=footprint)
-        return self.free & ~blocked
+    def clearance(self) -> np.ndarray:
+        """Distance in metres from each cell to the nearest occupied cell."""
+        return ndimage.distance_transform_edt(~self.occupied) * self.spec.resolution
+
+    def traversable(self, robot_xy: tuple[float, float], clearance: np.ndarray | None = None) -> np.ndarray:
+        """Free cells farther than the robot's radius from every occupied cell, and a way out.
+
+        The robot may stand closer to an obstacle than that (the world checks its true shape, and
+        it may have bumped into something it never saw). Around where it stands, cells are open as
+        long as they are no closer to an obstacle than the robot is now, so it can back away but
+        not push on.
+        """
+        clearance = self.clearance() if clearance is None else clearance
+        radius = self.config.robot_radius
+        row, col = self.spec.to_cell(np.asarray(robot_xy))
+        inside = self.spec.inside(np.array([row, col]))
+        here_clearance = float(clearance[row, col]) if inside else 0.0
+        around = self.spec.disc(robot_xy, radius + self.spec.resolution)
+        way_out = around & (clearance >= min(here_clearance, radius))
+        return self.free & ((clearance > radius) | way_out)
 
     def free_area_m2(self) -> float:
         return float(self.free.sum()) * self.spec.resolution**2
-
-
-def _disc_kernel(radius_cells: int) -> np.ndarray:
-    offsets = np.arange(-radius_cells, radius_cells + 1)
-    return np.hypot(*np.meshgrid(offsets, offsets)) <= radius_cells

@@ -15,9 +15,11 @@ from agent.planning.paths import DistanceField, distance_field, simplify_path, t
 @dataclass(frozen=True)
 class ExploreConfig:
     max_step_m: float = 3.0  # path length the robot may drive between two observations
-    min_frontier_distance_m: float = 1.0  # nearer frontiers are where the robot already stands
+    min_frontier_distance_m: float = 0.5  # nearer frontiers are where the robot already stands
     min_frontier_size: int = 3
     min_unexplored_neighbours: int = 2
+    comfort_m: float = 0.3  # beyond the robot's radius, clearance that paths prefer to keep
+    obstacle_cost: float = 3.0  # extra cost per metre right at the robot's radius from an obstacle
 
 
 @dataclass(frozen=True)
@@ -44,7 +46,10 @@ def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float]
     """Frontier clusters in the free space connected to the robot, nearer ones dropped."""
     spec = world_map.spec
     start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
-    field = distance_field(spec, world_map.traversable(), start)
+    clearance = world_map.clearance()
+    margin = (clearance - world_map.config.robot_radius) / config.comfort_m
+    cell_cost = 1.0 + config.obstacle_cost * np.clip(1.0 - margin, 0.0, 1.0)
+    field = distance_field(spec, world_map.traversable(robot_xy, clearance), start, cell_cost)
     reachable = np.isfinite(field.metres)
     mask = frontier_cells(reachable, world_map.explored, world_map.occupied, config.min_unexplored_neighbours)
     frontiers = cluster_frontiers(spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)
@@ -58,12 +63,17 @@ def nearest_frontier(candidates: Candidates) -> int | None:
     return int(np.argmin(candidates.distances_m)) if len(candidates.frontiers) else None
 
 
-def plan_move(candidates: Candidates, index: int, config: ExploreConfig = ExploreConfig()) -> MovePlan:
+def plan_move(candidates: Candidates, index: int, robot_xy: tuple[float, float],
+              config: ExploreConfig = ExploreConfig()) -> MovePlan:
     """A path toward frontier ``index``, cut to one step, facing along the path or the frontier normal."""
     frontier = candidates.frontiers[index]
+    robot_xy = np.asarray(robot_xy, dtype=float)
     field = candidates.field
     cells = field.path_to(frontier.centre)
-    full = simplify_path(field.spec.to_world(cells))
+    # Start where the robot is, not at its cell's centre: a robot touching an obstacle must not take
+    # a first sideways step toward it.
+    waypoints = np.vstack([robot_xy, field.spec.to_world(cells[1:])]) if len(cells) > 1 else np.array([robot_xy])
+    full = simplify_path(waypoints)
     path = truncate_path(full, config.max_step_m)
     truncated = not np.allclose(path[-1], full[-1])
     if truncated and len(path) >= 2:

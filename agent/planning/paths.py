@@ -12,7 +12,7 @@ from agent.mapping.grid import GridSpec
 
 @dataclass(frozen=True)
 class DistanceField:
-    """Path lengths in metres from one start cell to every cell (inf where unreachable)."""
+    """Path costs in (weighted) metres from one start cell to every cell (inf where unreachable)."""
 
     spec: GridSpec
     start: tuple[int, int]
@@ -26,9 +26,14 @@ class DistanceField:
         return np.asarray(self._mcp.traceback(cell), dtype=int)
 
 
-def distance_field(spec: GridSpec, traversable: np.ndarray, start: tuple[int, int]) -> DistanceField:
-    """Dijkstra over 8-connected traversable cells (diagonals cost √2 cells)."""
-    costs = np.where(traversable, 1.0, np.inf)
+def distance_field(spec: GridSpec, traversable: np.ndarray, start: tuple[int, int],
+                   cell_cost: np.ndarray | None = None) -> DistanceField:
+    """Dijkstra over 8-connected traversable cells (diagonals cost √2 cells).
+
+    ``cell_cost`` (≥ 1) weighs cells, e.g. to keep paths off walls; the field is then in weighted
+    metres, which equal true metres along paths that stay clear.
+    """
+    costs = np.where(traversable, 1.0 if cell_cost is None else cell_cost, np.inf)
     costs[start] = 1.0  # the robot stands there, whatever the map says
     mcp = MCP_Geometric(costs, fully_connected=True)
     cumulative, _ = mcp.find_costs([start])
@@ -46,23 +51,37 @@ def truncate_path(points_xy: np.ndarray, max_length_m: float) -> np.ndarray:
         return points_xy
     last = int(np.searchsorted(travelled, max_length_m, side="right")) - 1
     fraction = (max_length_m - travelled[last]) / lengths[last]
+    if fraction <= 0:  # the cut falls on a waypoint: end there, without a zero-length last segment
+        return points_xy[: last + 1]
     end = points_xy[last] + fraction * segments[last]
     return np.vstack([points_xy[: last + 1], end])
 
 
 def simplify_path(points_xy: np.ndarray, tolerance_m: float = 0.05) -> np.ndarray:
-    """Drop waypoints that lie on a straight line with their neighbours (fewer, longer segments)."""
+    """Drop waypoints that lie on a straight line with their neighbours (fewer, longer segments).
+
+    Each kept segment runs from the last kept point as far as every point it replaces stays within
+    ``tolerance_m`` of it, so a bend made of small turns is kept rather than cut across.
+    """
     if len(points_xy) < 3:
         return points_xy
-    kept = [points_xy[0]]
-    for previous, point, following in zip(points_xy[:-2], points_xy[1:-1], points_xy[2:]):
-        direction = following - previous
-        norm = np.hypot(*direction)
-        offset = abs(direction[0] * (point[1] - previous[1]) - direction[1] * (point[0] - previous[0]))
-        if norm == 0 or offset / norm > tolerance_m:
-            kept.append(point)
-    kept.append(points_xy[-1])
-    return np.asarray(kept)
+    points_xy = np.asarray(points_xy, dtype=float)
+    kept = [0]
+    for end in range(2, len(points_xy)):
+        if _max_offset(points_xy[kept[-1] : end + 1]) > tolerance_m:
+            kept.append(end - 1)
+    kept.append(len(points_xy) - 1)
+    return points_xy[kept]
+
+
+def _max_offset(points_xy: np.ndarray) -> float:
+    """The largest distance of the inner points from the segment joining the first and last."""
+    start, end = points_xy[0], points_xy[-1]
+    direction = end - start
+    squared = float(direction @ direction)
+    inner = points_xy[1:-1] - start
+    t = np.clip(inner @ direction / squared, 0.0, 1.0) if squared > 0 else np.zeros(len(inner))
+    return float(np.hypot(*(inner - t[:, None] * direction).T).max())
 
 
 def path_length(points_xy: np.ndarray) -> float:

@@ -1,0 +1,125 @@
+"""The `homebot` command: world, run, watch, bench."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from pathlib import Path
+
+from agent.bus.session import EndpointError, open_session
+from agent.config import Config, ConfigError, load_config
+
+DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["world"]:
+        from worlds.server import main as world_main
+
+        return world_main(argv[1:])
+    parser = _parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return args.handler(args)
+    except (ConfigError, EndpointError) as error:
+        print(f"homebot: {error}", file=sys.stderr)
+        return 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="homebot", description=__doc__)
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    commands = parser.add_subparsers(dest="command", required=True)
+    commands.add_parser("world", help="serve a simulated home over Zenoh (see `homebot world --help`)")
+
+    run = commands.add_parser("run", help="run one EQA episode against a simulated home")
+    _config_options(run)
+    run.add_argument("--seed", type=int, default=0, help="home and scenario seed (default 0)")
+    run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
+    run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
+    run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
+    run.set_defaults(handler=_run)
+
+    watch = commands.add_parser("watch", help="show a running agent's behaviour tree live")
+    watch.add_argument("--connect", default=DEFAULT_AGENT_ENDPOINT, metavar="ENDPOINT",
+                       help=f"the agent's listen endpoint (default {DEFAULT_AGENT_ENDPOINT})")
+    watch.add_argument("--namespace", help="only this run's namespace (default: any run)")
+    watch.add_argument("--once", action="store_true", help="print one snapshot and exit")
+    watch.add_argument("--json", action="store_true", help="print snapshots as JSON")
+    watch.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for a snapshot (default 30)")
+    watch.set_defaults(handler=_watch)
+
+    bench = commands.add_parser("bench", help="measure speed")
+    benches = bench.add_subparsers(dest="bench", required=True)
+    step = benches.add_parser("step", help="per-stage time of each step over one fixed episode")
+    _config_options(step)
+    step.add_argument("--seed", type=int, default=0)
+    step.add_argument("--json", action="store_true", help="print the figures as JSON")
+    step.set_defaults(handler=_bench_step)
+    return parser
+
+
+def _config_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--config", type=Path, help="a TOML file of settings")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override one setting, e.g. --set vlm.skill=0.6 (repeatable)")
+    parser.add_argument("--listen", action="append", metavar="ENDPOINT",
+                        help=f"where `homebot watch` can reach this agent (default {DEFAULT_AGENT_ENDPOINT})")
+
+
+def _load(args: argparse.Namespace) -> Config:
+    overrides = list(args.set)
+    if args.listen:
+        overrides.append("bus.listen=" + json.dumps(args.listen))
+    return load_config(args.config, overrides)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from agent.runtime.run import RunError, RunRequest, run_episode
+    from agent.runtime.progress import StepPrinter
+
+    config = _load(args)
+    request = RunRequest(seed=args.seed, config=config, out_root=args.out, connect=args.connect,
+                         namespace=args.namespace)
+    print(f"homebot run: seed {args.seed}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
+          f"watch with `homebot watch --connect {config.bus.listen[0]}`", flush=True)
+    try:
+        result = run_episode(request, extra_sinks=[StepPrinter(sys.stdout)])
+    except RunError as error:
+        print(f"homebot run: {error}", file=sys.stderr)
+        return 1
+    verdict = "correct" if result["correct"] else "wrong"
+    if result["status"] == "answered":
+        print(f"answer {result['answer']} ({result['answer_text']}); truth {result['ground_truth']} "
+              f"({result['ground_truth_text']}): {verdict}, {result['steps']} steps, {result['seconds']:.1f} s")
+    else:
+        print(f"episode failed: {result['reason']}", file=sys.stderr)
+    print(f"run folder: {result['folder']}")
+    return 0 if result["status"] == "answered" else 1
+
+
+def _watch(args: argparse.Namespace) -> int:
+    from agent.watch import watch
+
+    session = open_session(connect=[args.connect])
+    try:
+        return watch(session, args.namespace, args.once, args.json, args.timeout)
+    finally:
+        session.close()
+
+
+def _bench_step(args: argparse.Namespace) -> int:
+    from agent.bench import bench_step, dump, format_step_table
+
+    report = bench_step(_load(args), args.seed, None)
+    print(dump(report) if args.json else format_step_table(report))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

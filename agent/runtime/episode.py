@@ -1,0 +1,120 @@
+"""Ticking a tree until the episode answers, fails, or runs out of time, and never hanging.
+
+py_trees lets an exception inside a behaviour escape `tick()`. The runner catches it, names the
+behaviour it came from, and ends the episode as a failure with that reason, so a bug in one leaf
+is a recorded outcome rather than a crash.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+
+from agent import blackboard as bb
+from agent.runtime.snapshot import snapshot
+
+log = logging.getLogger(__name__)
+
+SnapshotSink = Callable[[dict[str, Any]], None]
+
+
+@dataclass
+class EpisodeOutcome:
+    """How an episode ended: answered (with the answer) or failed (with the reason)."""
+
+    status: str  # "answered" or "failed"
+    reason: str
+    answer: dict[str, Any] | None
+    ticks: int
+    seconds: float
+    failed_behaviour: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class EpisodeRunner:
+    def __init__(self, root: py_trees.behaviour.Behaviour, run_id: str, sinks: list[SnapshotSink],
+                 max_seconds: float, tick_period_s: float = 0.002,
+                 timer: Any | None = None) -> None:
+        self.tree = py_trees.trees.BehaviourTree(root)
+        self.visitor = py_trees.visitors.SnapshotVisitor()
+        self.tree.visitors.append(self.visitor)
+        self.run_id = run_id
+        self.sinks = sinks
+        self.max_seconds = max_seconds
+        self.tick_period_s = tick_period_s
+        self.timer = timer
+        self.blackboard = py_trees.blackboard.Client(name="EpisodeRunner")
+        self.blackboard.register_key(bb.ANSWER, access=py_trees.common.Access.READ)
+
+    def run(self) -> EpisodeOutcome:
+        started = time.monotonic()
+        ticks = 0
+        try:
+            while True:
+                ticks += 1
+                tick_started = time.perf_counter()
+                error = self._tick()
+                tick_ms = (time.perf_counter() - tick_started) * 1000.0
+                if self.timer is not None:
+                    self.timer.record("tick", tick_ms)
+                self._publish(snapshot(self.tree.root, self.visitor, ticks, tick_ms, self.run_id))
+                elapsed = time.monotonic() - started
+                if error is not None:
+                    return EpisodeOutcome("failed", error[1], None, ticks, elapsed, error[0])
+                answer = self.blackboard.get(bb.ANSWER) if self.blackboard.exists(bb.ANSWER) else None
+                if answer is not None:
+                    return EpisodeOutcome("answered", answer["rule"], answer, ticks, elapsed)
+                if self.tree.root.status == Status.FAILURE:
+                    name, reason = self._failure_reason()
+                    return EpisodeOutcome("failed", reason, None, ticks, elapsed, name)
+                if elapsed > self.max_seconds:
+                    return EpisodeOutcome("failed", f"the episode ran past its limit of {self.max_seconds:g} s",
+                                          None, ticks, elapsed)
+                if self.tree.root.status == Status.RUNNING:
+                    time.sleep(self.tick_period_s)
+        finally:
+            self.tree.interrupt()
+            self.tree.shutdown()
+
+    def _tick(self) -> tuple[str, str] | None:
+        """Tick once; on an exception, (behaviour name, reason)."""
+        try:
+            self.tree.tick()
+        except Exception as error:
+            name = _raising_behaviour(error)
+            log.error("behaviour %s raised:\n%s", name, traceback.format_exc())
+            return name, f"{name} raised {type(error).__name__}: {error}"
+        return None
+
+    def _failure_reason(self) -> tuple[str | None, str]:
+        """The deepest behaviour visited this tick that failed, and its feedback message."""
+        failed = [b for b in self.tree.root.iterate()
+                  if b.id in self.visitor.visited and b.status == Status.FAILURE and not b.children]
+        leaf = failed[-1] if failed else None
+        return (leaf.name, f"{leaf.name}: {leaf.feedback_message}") if leaf else (None, "the tree failed")
+
+    def _publish(self, data: dict[str, Any]) -> None:
+        for sink in self.sinks:
+            try:
+                sink(data)
+            except Exception:  # a broken sink (a full disk, a closed session) must not end the episode
+                log.exception("snapshot sink failed")
+
+
+def _raising_behaviour(error: BaseException) -> str:
+    """The name of the innermost behaviour whose method is on the exception's traceback."""
+    name = "a behaviour"
+    frame_tb = error.__traceback__
+    while frame_tb is not None:
+        candidate = frame_tb.tb_frame.f_locals.get("self")
+        if isinstance(candidate, py_trees.behaviour.Behaviour) and not candidate.children:
+            name = candidate.name
+        frame_tb = frame_tb.tb_next
+    return name

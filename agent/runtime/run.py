@@ -1,0 +1,167 @@
+"""One EQA episode from start to finish: bring up or join a world, run the tree, record the run."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import py_trees
+
+from agent import blackboard as bb
+from agent.bus.keys import Keys, check_namespace
+from agent.bus.rpc import QueryFailed
+from agent.bus.session import free_tcp_endpoint, open_session
+from agent.config import Config
+from agent.eqa.answers import AnswerLog
+from agent.mapping.occupancy import ExplorationMap
+from agent.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
+from agent.runtime.plots import save_map_png
+from agent.runtime.record import SnapshotLog, write_json_atomic
+from agent.runtime.timing import StageTimer
+from agent.runtime.world_link import WorldLink
+from agent.runtime.world_process import WorldProcess, WorldStartError
+from agent.vlm.sim import SimulatedVLM
+from behaviours.eqa_tree import EqaTreeParts, build_eqa_tree
+from worlds.vocabulary import LETTERS
+
+log = logging.getLogger(__name__)
+
+DEFAULT_NAMESPACE = "homebot/default"
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    seed: int
+    config: Config
+    out_root: Path = Path("runs")
+    connect: str | None = None  # a running world's endpoint; None spawns one
+    namespace: str | None = None
+    run_id: str | None = None
+
+
+class RunError(RuntimeError):
+    """The episode could not start (no world, a bad reset); the run folder says so too."""
+
+
+def new_run_id(seed: int) -> str:
+    return f"{time.strftime('%Y%m%d-%H%M%S')}-seed{seed}-{os.urandom(2).hex()}"
+
+
+def run_episode(request: RunRequest, timer: StageTimer | None = None,
+                extra_sinks: list[SnapshotSink] | None = None) -> dict[str, Any]:
+    """Run one episode and return its result (also written to ``<out_root>/<run_id>/result.json``)."""
+    run_id = request.run_id or new_run_id(request.seed)
+    namespace = check_namespace(request.namespace or (DEFAULT_NAMESPACE if request.connect else f"homebot/{run_id}"))
+    folder = request.out_root / run_id
+    folder.mkdir(parents=True, exist_ok=True)
+    config = request.config
+    keys = Keys(namespace)
+    endpoint = request.connect or free_tcp_endpoint()
+    result: dict[str, Any] = {"run_id": run_id, "seed": request.seed, "namespace": namespace,
+                              "world": "connected" if request.connect else "spawned", "endpoint": endpoint}
+    world: WorldProcess | None = None
+    session = open_session(listen=list(config.bus.listen), connect=[endpoint])
+    link = WorldLink(session, keys, config.bus.query_timeout_s)
+    try:
+        if request.connect is None:
+            world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
+            world.wait_ready(link, config.bus.world_start_timeout_s)
+        elif not link.liveness.wait_alive(config.bus.world_start_timeout_s):
+            raise WorldStartError(f"no world answers under {namespace!r} at {endpoint}")
+        reset = link.call("reset", {"seed": request.seed}, timeout_s=config.bus.world_start_timeout_s)
+        scenario = reset.meta["scenario"]
+        result.update(_scenario_fields(scenario, config))
+        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, link, session,
+                                                   keys, folder, timer, extra_sinks or [])
+    except (WorldStartError, QueryFailed, KeyError) as error:
+        reason = f"the episode could not start: {error}"
+        result.update({"status": "failed", "reason": reason, "correct": False})
+        write_json_atomic(folder / "result.json", result)
+        raise RunError(f"{reason}\n(run folder: {folder})") from None
+    finally:
+        link.close()
+        if world is not None:
+            world.stop()
+        session.close()
+    result.update(_outcome_fields(outcome, result))
+    if timer is not None:
+        result["timings"] = timer.summary()
+    write_json_atomic(folder / "result.json", result)
+    title = f"{result['question']}\nanswer {result['answer'] or '—'}, truth {result['ground_truth']} ({result['status']})"
+    save_map_png(folder / "map.png", world_map, trajectory, title)
+    result["folder"] = str(folder)
+    return result
+
+
+def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any], config: Config,
+              link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
+              extra_sinks: list[SnapshotSink]) -> tuple[EpisodeOutcome, ExplorationMap, list]:
+    py_trees.blackboard.Blackboard.clear()
+    writer = py_trees.blackboard.Client(name="EpisodeSetup")
+    start = tuple(float(v) for v in reset_meta["base_pose"])
+    initial = {
+        bb.QUESTION: scenario["question"],
+        bb.CHOICES: list(scenario["choices"]),
+        bb.BUDGET: config.episode.budget or int(scenario["budget"]),
+        bb.MAP: ExplorationMap(start[:2], config.map),
+        bb.ANSWER_LOG: AnswerLog(),
+        bb.TRAJECTORY: [start],
+        bb.PLAN: None,
+        bb.EXPLORATION_COMPLETE: False,
+    }
+    for key, value in initial.items():
+        writer.register_key(key, access=py_trees.common.Access.WRITE)
+        writer.set(key, value)
+    parts = EqaTreeParts(link, SimulatedVLM(config.vlm), config.explore, config.episode.vlm_timeout_s,
+                         config.bus.move_timeout_s, timer)
+    publisher = session.declare_publisher(keys.agent_tree)
+    events = session.declare_publisher(keys.agent_events)
+    snapshot_log = SnapshotLog(folder / "snapshots.jsonl")
+    sinks = [snapshot_log, lambda data: publisher.put(json.dumps(data, ensure_ascii=False)), *extra_sinks]
+    events.put(json.dumps({"event": "started", "run": run_id, "question": scenario["question"]}))
+    runner = EpisodeRunner(build_eqa_tree(parts), run_id, sinks, config.episode.max_seconds,
+                           config.episode.tick_period_s, timer)
+    try:
+        outcome = runner.run()
+    finally:
+        snapshot_log.close()
+    outcome.extra["steps"] = len(writer.get(bb.ANSWER_LOG))
+    events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
+    publisher.undeclare()
+    events.undeclare()
+    return outcome, writer.get(bb.MAP), writer.get(bb.TRAJECTORY)
+
+
+def _scenario_fields(scenario: dict[str, Any], config: Config) -> dict[str, Any]:
+    truth = scenario["answer"]
+    return {
+        "question": scenario["question"],
+        "choices": scenario["choices"],
+        "kind": scenario.get("kind"),
+        "ground_truth": truth,
+        "ground_truth_text": scenario["choices"][LETTERS.index(truth)],
+        "budget": config.episode.budget or int(scenario["budget"]),
+    }
+
+
+def _outcome_fields(outcome: EpisodeOutcome, result: dict[str, Any]) -> dict[str, Any]:
+    answer = outcome.answer or {}
+    letter = answer.get("letter")
+    return {
+        "status": outcome.status,
+        "reason": outcome.reason,
+        "failed_behaviour": outcome.failed_behaviour,
+        "answer": letter,
+        "answer_text": answer.get("text"),
+        "correct": letter is not None and letter == result["ground_truth"],
+        "answer_detail": answer or None,
+        "steps": outcome.extra.get("steps", 0),
+        "ticks": outcome.ticks,
+        "seconds": round(outcome.seconds, 3),
+    }

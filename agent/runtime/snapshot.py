@@ -1,0 +1,57 @@
+"""Tree snapshots: what every behaviour is doing on one tick, as plain JSON.
+
+One snapshot names every behaviour (id, name, type, parent, status, feedback message), the path
+visited on that tick, the tick count and duration, and the blackboard keys that the visited
+behaviours use, each as a short string. `homebot watch` renders them; scripts read them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import py_trees
+
+SNAPSHOT_VERSION = 1
+_SHORT = 72
+
+
+def short(value: Any) -> str:
+    """A one-line description of a blackboard value that stays readable for large objects."""
+    if isinstance(value, np.ndarray):
+        return f"array{list(value.shape)} {value.dtype}"
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return f"<{type(value).__name__}>"
+    if isinstance(value, (list, tuple)) and len(value) > 4:
+        return f"{type(value).__name__} of {len(value)}, last {short(value[-1])}"
+    text = repr(value) if not hasattr(value, "__len__") or isinstance(value, (str, list, tuple, dict)) else f"<{type(value).__name__} of {len(value)}>"
+    return text if len(text) <= _SHORT else text[: _SHORT - 1] + "…"
+
+
+def snapshot(root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.SnapshotVisitor,
+             tick: int, tick_ms: float, run: str) -> dict[str, Any]:
+    """The JSON-able snapshot of the tree just ticked (``visitor`` must have run on that tick)."""
+    behaviours = []
+    for behaviour in root.iterate():
+        behaviours.append({
+            "id": str(behaviour.id),
+            "name": behaviour.name,
+            "type": type(behaviour).__name__,
+            "parent": str(behaviour.parent.id) if behaviour.parent else None,
+            "status": behaviour.status.value,
+            "message": behaviour.feedback_message,
+            "visited": behaviour.id in visitor.visited,
+        })
+    storage = py_trees.blackboard.Blackboard.storage
+    keys = sorted(visitor.visited_blackboard_keys)
+    return {
+        "version": SNAPSHOT_VERSION,
+        "run": run,
+        "tick": tick,
+        "tick_ms": round(tick_ms, 3),
+        "status": root.status.value,
+        "visited_path": [str(i) for i in visitor.visited],
+        "behaviours": behaviours,
+        "blackboard": {key: short(storage[key]) for key in keys if key in storage},
+    }

@@ -1,0 +1,41 @@
+"""Per-stage timings of an episode, for `homebot bench step` and the run record."""
+
+from __future__ import annotations
+
+import time
+from collections import defaultdict
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+
+
+class StageTimer:
+    """Collects durations in milliseconds by stage name."""
+
+    def __init__(self) -> None:
+        self.samples: dict[str, list[float]] = defaultdict(list)
+
+    def record(self, stage: str, milliseconds: float) -> None:
+        self.samples[stage].append(float(milliseconds))
+
+    @contextmanager
+    def measure(self, stage: str) -> Iterator[None]:
+        started = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.record(stage, (time.perf_counter() - started) * 1000.0)
+
+    def summary(self) -> dict[str, dict[str, float]]:
+        """Count, median, p95 and max per stage."""
+        return {
+            stage: {
+                "count": len(values),
+                "median_ms": float(np.median(values)),
+                "p95_ms": float(np.percentile(values, 95)),
+                "max_ms": float(np.max(values)),
+            }
+            for stage, values in self.samples.items()
+            if values
+        }

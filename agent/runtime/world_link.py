@@ -1,0 +1,36 @@
+"""The agent's handle on one world: its session, its keys, and whether it is still alive."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import zenoh
+
+from agent.bus.codec import Message
+from agent.bus.keys import Keys
+from agent.bus.liveness import LivenessWatch
+from agent.bus.rpc import PendingReply
+
+
+class WorldLink:
+    """Sends world commands; any query fails at once with a reason when the world's token goes."""
+
+    def __init__(self, session: zenoh.Session, keys: Keys, timeout_s: float = 10.0) -> None:
+        self.session = session
+        self.keys = keys
+        self.timeout_s = timeout_s
+        self.liveness = LivenessWatch(session, keys.world_alive)
+
+    def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None) -> PendingReply:
+        return PendingReply(self.session, self.keys.world_cmd(verb), meta, None,
+                            timeout_s or self.timeout_s, self.liveness.gone)
+
+    def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None) -> Message:
+        return self.request(verb, meta, timeout_s).wait()
+
+    def describe(self) -> Message:
+        return PendingReply(self.session, self.keys.world_description, None, None, self.timeout_s,
+                            self.liveness.gone).wait()
+
+    def close(self) -> None:
+        self.liveness.close()

@@ -1,0 +1,62 @@
+"""Starting a world server as a child process (the embedded default of `homebot run`)."""
+
+from __future__ import annotations
+
+import logging
+import subprocess
+import sys
+from pathlib import Path
+
+from agent.config import CameraSettings
+from agent.runtime.world_link import WorldLink
+
+log = logging.getLogger(__name__)
+
+
+class WorldStartError(RuntimeError):
+    """The world process did not come up; the text carries the end of its log."""
+
+
+class WorldProcess:
+    """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file."""
+
+    def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path) -> None:
+        self.log_path = log_path
+        command = [
+            sys.executable, "-m", "worlds.server",
+            "--namespace", namespace,
+            "--listen", endpoint,
+            "--width", str(camera.width),
+            "--height", str(camera.height),
+            "--hfov", str(camera.hfov_deg),
+        ]
+        log_path.parent.mkdir(parents=True, exist_ok=True)
+        self._log_file = open(log_path, "wb")
+        self.process = subprocess.Popen(command, stdout=self._log_file, stderr=subprocess.STDOUT,
+                                        stdin=subprocess.DEVNULL)
+
+    def wait_ready(self, link: WorldLink, timeout_s: float) -> None:
+        """Wait for the world's liveliness token; raise WorldStartError if it exits or is too slow."""
+        waited = 0.0
+        while not link.liveness.wait_alive(0.2):
+            waited += 0.2
+            if self.process.poll() is not None:
+                raise WorldStartError(f"the world process exited with code {self.process.returncode}:\n{self.log_tail()}")
+            if waited >= timeout_s:
+                raise WorldStartError(f"the world process did not come up within {timeout_s:.0f} s:\n{self.log_tail()}")
+
+    def log_tail(self, lines: int = 20) -> str:
+        self._log_file.flush()
+        text = self.log_path.read_text(errors="replace").splitlines()
+        return "\n".join(text[-lines:])
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout_s)
+            except subprocess.TimeoutExpired:
+                log.warning("world process ignored SIGTERM; killing it")
+                self.process.kill()
+                self.process.wait()
+        self._log_file.close()
