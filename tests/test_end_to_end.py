@@ -1,0 +1,144 @@
+"""Whole episodes: a spawned world, the agent's tree, snapshots to a watcher, failures recorded."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from agent.bus.keys import ANY_AGENT_TREE
+from agent.bus.session import free_tcp_endpoint, open_session
+from agent.config import load_config
+from agent.runtime.run import RunRequest, run_episode
+
+pytestmark = pytest.mark.slow
+
+
+def _config(agent_endpoint: str, budget: int):
+    return load_config(overrides=[f'bus.listen=["{agent_endpoint}"]', f"episode.budget={budget}"])
+
+
+def test_episode_answers_while_a_separate_subscriber_receives_snapshots(tmp_path: Path) -> None:
+    agent_endpoint = free_tcp_endpoint()
+    watcher = open_session(connect=[agent_endpoint])
+    received: list[dict] = []
+    subscriber = watcher.declare_subscriber(ANY_AGENT_TREE, lambda s: received.append(json.loads(s.payload.to_bytes())))
+    try:
+        result = run_episode(RunRequest(seed=3, config=_config(agent_endpoint, budget=5), out_root=tmp_path))
+    finally:
+        subscriber.undeclare()
+        watcher.close()
+
+    assert result["status"] == "answered", result["reason"]
+    assert result["answer"] in "ABCD" and result["ground_truth"] in "ABCD"
+    assert result["correct"] == (result["answer"] == result["ground_truth"])
+    assert result["steps"] == 5
+    folder = Path(result["folder"])
+    on_disk = json.loads((folder / "result.json").read_text())
+    assert on_disk["question"] == result["question"] and on_disk["answer"] == result["answer"]
+    logged = [json.loads(line) for line in (folder / "snapshots.jsonl").read_text().splitlines()]
+    assert logged and logged[-1]["tick"] == result["ticks"]
+    assert (folder / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert received, "the separate subscriber got no snapshot"
+    assert {s["run"] for s in received} == {result["run_id"]}
+    names = {b["name"] for b in received[-1]["behaviours"]}
+    assert {"Observe", "IntegrateMap", "QueryVLM", "SelectFrontier", "Navigate", "AnswerFallback"} <= names
+
+
+def test_same_seed_gives_the_same_episode(tmp_path: Path) -> None:
+    results = [
+        run_episode(RunRequest(seed=5, config=_config(free_tcp_endpoint(), budget=4), out_root=tmp_path / str(i)))
+        for i in range(2)
+    ]
+    for key in ("question", "choices", "answer", "ground_truth", "steps"):
+        assert results[0][key] == results[1][key], key
+    moves = [_navigate_messages(Path(result["folder"]) / "snapshots.jsonl") for result in results]
+    assert moves[0] and moves[0] == moves[1]
+
+
+def _navigate_messages(log: Path) -> list[str]:
+    """Where each step's move ended, in order, read from the snapshot log."""
+    messages: list[str] = []
+    for line in log.read_text().splitlines():
+        for behaviour in json.loads(line)["behaviours"]:
+            if behaviour["name"] == "Navigate" and behaviour["status"] == "SUCCESS" and behaviour["visited"]:
+                if not messages or messages[-1] != behaviour["message"]:
+                    messages.append(behaviour["message"])
+    return messages
+
+
+def _start_world(namespace: str, endpoint: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "worlds.server", "--namespace", namespace, "--listen", endpoint],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+
+
+def test_killed_world_fails_the_episode_with_the_reason_within_five_seconds(tmp_path: Path) -> None:
+    namespace, world_endpoint = "homebot/killtest", free_tcp_endpoint()
+    world = _start_world(namespace, world_endpoint)
+    outcome: dict = {}
+
+    def run() -> None:
+        request = RunRequest(seed=2, config=_config(free_tcp_endpoint(), budget=500), out_root=tmp_path,
+                             connect=world_endpoint, namespace=namespace, run_id="killed")
+        outcome.update(run_episode(request))
+
+    runner = threading.Thread(target=run, daemon=True)
+    try:
+        runner.start()
+        snapshots = tmp_path / "killed" / "snapshots.jsonl"
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (snapshots.exists() and snapshots.stat().st_size > 20000):
+            time.sleep(0.05)
+        assert snapshots.exists(), "the episode never started ticking"
+        os.kill(world.pid, signal.SIGKILL)
+        killed_at = time.monotonic()
+        runner.join(timeout=30)
+        ended_after = time.monotonic() - killed_at
+    finally:
+        world.kill()
+        world.wait()
+    assert not runner.is_alive(), "the agent hung after the world died"
+    assert ended_after < 5.0, f"the agent took {ended_after:.1f} s to notice"
+    assert outcome["status"] == "failed"
+    assert "world" in outcome["reason"] and outcome["failed_behaviour"] in {"Observe", "Navigate"}
+    recorded = json.loads((tmp_path / "killed" / "result.json").read_text())
+    assert recorded["status"] == "failed" and recorded["reason"] == outcome["reason"]
+
+
+def test_run_and_watch_from_the_command_line(tmp_path: Path) -> None:
+    agent_endpoint = free_tcp_endpoint()
+    run = subprocess.Popen(
+        [sys.executable, "-m", "agent.cli", "run", "--seed", "1", "--listen", agent_endpoint,
+         "--set", "episode.budget=8", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        watch = subprocess.run(
+            [sys.executable, "-m", "agent.cli", "watch", "--connect", agent_endpoint, "--once", "--json",
+             "--timeout", "60"],
+            capture_output=True, text=True, timeout=120,
+        )
+        stdout, stderr = run.communicate(timeout=300)
+    finally:
+        run.kill()
+    assert watch.returncode == 0, watch.stderr
+    snapshot = json.loads(watch.stdout)
+    assert snapshot["behaviours"][0]["name"] == "EQA episode"
+    assert run.returncode == 0, stderr
+    assert "answer " in stdout and "run folder:" in stdout
+
+
+def test_a_bad_setting_is_rejected_with_its_name() -> None:
+    done = subprocess.run([sys.executable, "-m", "agent.cli", "run", "--set", "map.resolution=fine"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert "map.resolution" in done.stderr
