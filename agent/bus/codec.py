@@ -68,7 +68,7 @@ def encode(meta: dict[str, Any], arrays: dict[str, np.ndarray] | None = None) ->
         dtype_name = np.dtype(array.dtype).name
         if dtype_name not in ALLOWED_DTYPES:
             raise WireError(f"arrays.{name}.dtype: {dtype_name!r} is not one of {sorted(ALLOWED_DTYPES)}")
-        contiguous = np.ascontiguousarray(array, dtype=ALLOWED_DTYPES[dtype_name])
+        contiguous = np.asarray(array, dtype=ALLOWED_DTYPES[dtype_name], order="C")  # keeps 0-d arrays 0-d
         table.append({"name": name, "dtype": dtype_name, "shape": list(contiguous.shape)})
         chunks.append(contiguous.tobytes())
     header = json.dumps({**meta, "arrays": table}, separators=(",", ":"), allow_nan=False).encode()
@@ -142,5 +142,7 @@ def _check_array_table(table: Any, limits: Limits) -> list[tuple[str, np.dtype, 
         nbytes = math.prod(shape) * dtype.itemsize
         if nbytes > limits.max_payload_bytes:
             raise WireError(f"{where}: {nbytes} bytes exceeds the limit of {limits.max_payload_bytes}")
+        if math.prod(n for n in shape if n) > limits.max_payload_bytes:  # empty, but numpy cannot shape it
+            raise WireError(f"{where}.shape: {shape} has more elements than the payload limit allows")
         specs.append((name, dtype, tuple(shape), nbytes))
     return specs

@@ -80,7 +80,7 @@ class EpisodeRunner:
                 if self.tree.root.status == Status.RUNNING:
                     time.sleep(self.tick_period_s)
         finally:
-            self.tree.interrupt()
+            self.tree.root.stop(Status.INVALID)  # terminate whatever is still RUNNING
             self.tree.shutdown()
 
     def _tick(self) -> tuple[str, str] | None:

@@ -8,6 +8,7 @@ behaviours use, each as a short string. `homebot watch` renders them; scripts re
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -33,7 +34,7 @@ def snapshot(root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.Snap
              tick: int, tick_ms: float, run: str) -> dict[str, Any]:
     """The JSON-able snapshot of the tree just ticked (``visitor`` must have run on that tick)."""
     behaviours = []
-    for behaviour in root.iterate():
+    for behaviour in _pre_order(root):
         behaviours.append({
             "id": str(behaviour.id),
             "name": behaviour.name,
@@ -55,3 +56,10 @@ def snapshot(root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.Snap
         "behaviours": behaviours,
         "blackboard": {key: short(storage[key]) for key in keys if key in storage},
     }
+
+
+def _pre_order(behaviour: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
+    """Parents before their children, children in tick order (py_trees' iterate() is post-order)."""
+    yield behaviour
+    for child in behaviour.children:
+        yield from _pre_order(child)
