@@ -82,13 +82,13 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
             try:
                 payload = inbox.get(timeout=timeout_s)
             except queue.Empty:
-                print(f"homebot watch: no tree snapshot on {key} within {timeout_s:.0f} s "
-                      "(is `homebot run` running, and is --connect its --listen endpoint?)", file=sys.stderr)
+                sys.stderr.write(f"homebot watch: no tree snapshot on {key} within {timeout_s:.0f} s "
+                                 "(is `homebot run` running, and is --connect its --listen endpoint?)\n")
                 return 1
             try:
                 data = parse_snapshot(payload)
             except SnapshotError as error:
-                print(f"homebot watch: skipped a bad snapshot: {error}", file=sys.stderr)
+                sys.stderr.write(f"homebot watch: skipped a bad snapshot: {error}\n")
                 continue
             text = json.dumps(data, ensure_ascii=False) if as_json else render(data, colour)
             if colour:

@@ -1,0 +1,1 @@
+"""The simulated home: generator, scenarios, PyBullet scene and the world server."""

@@ -22,7 +22,7 @@ _FAR_PLANE = 1.0 - 1e-6
 
 
 @dataclass(frozen=True)
-class Observation:
+class Frame:
     """One frame: RGB (H, W, 3) uint8, depth (H, W) float32 metres, seg (H, W) int32 instance ids."""
 
     rgb: np.ndarray
@@ -57,7 +57,7 @@ def render(
     camera: CameraConfig,
     base_pose: tuple[float, float, float],
     body_labels: dict[int, Label],
-) -> Observation:
+) -> Frame:
     """Render what the head camera sees from ``base_pose``; labels only for instances in the frame."""
     pose = camera_pose(base_pose, camera)
     view, projection = _matrices(camera, pose)
@@ -77,7 +77,7 @@ def render(
     seg = _instances(np.asarray(body_seg, dtype=np.int64).reshape(shape), body_labels)
     present = {int(i) for i in np.unique(seg) if i >= 0}
     labels = sorted((label for label in body_labels.values() if label["id"] in present), key=lambda l: l["id"])
-    return Observation(rgb, depth, seg, labels, pose, render_ms)
+    return Frame(rgb, depth, seg, labels, pose, render_ms)
 
 
 def _instances(body_seg: np.ndarray, body_labels: dict[int, Label]) -> np.ndarray:

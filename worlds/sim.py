@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import pybullet as p
 
-from worlds.camera import Observation, render
+from worlds.camera import Frame, render
 from worlds.home import HomeSpec, generate_home
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig
 from worlds.scenario import Scenario, make_scenario
@@ -85,7 +85,7 @@ class World:
         p.resetBasePositionAndOrientation(self._robot, position, orientation, physicsClientId=self.client)
         self.base_pose = (float(x), float(y), float(yaw))
 
-    def observe(self) -> Observation:
+    def observe(self) -> Frame:
         """Render the head camera, with the robot's own body stepped out of the picture meanwhile."""
         self.observations += 1
         pose = self.base_pose

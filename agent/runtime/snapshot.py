@@ -22,11 +22,13 @@ def short(value: Any) -> str:
     """A one-line description of a blackboard value that stays readable for large objects."""
     if isinstance(value, np.ndarray):
         return f"array{list(value.shape)} {value.dtype}"
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return f"<{type(value).__name__}>"
     if isinstance(value, (list, tuple)) and len(value) > 4:
         return f"{type(value).__name__} of {len(value)}, last {short(value[-1])}"
-    text = repr(value) if not hasattr(value, "__len__") or isinstance(value, (str, list, tuple, dict)) else f"<{type(value).__name__} of {len(value)}>"
+    if hasattr(value, "__len__") and not isinstance(value, (str, list, tuple, dict)):
+        return f"<{type(value).__name__} of {len(value)}>"
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return f"<{type(value).__name__}>"
+    text = repr(value)
     return text if len(text) <= _SHORT else text[: _SHORT - 1] + "…"
 
 
