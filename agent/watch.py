@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import queue
 import sys
+import time
 from typing import Any, TextIO
 
 import zenoh
@@ -64,8 +65,13 @@ def render(data: dict[str, Any], colour: bool) -> str:
 
 
 def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bool, timeout_s: float,
-          out: TextIO = sys.stdout) -> int:
-    """Print snapshots as they come; with ``once``, the first one. Returns an exit code."""
+          out: TextIO = sys.stdout, refresh_hz: float = 10.0) -> int:
+    """Print snapshots as they come; with ``once``, the first one. Returns an exit code.
+
+    The live tree is redrawn at most ``refresh_hz`` times a second, always with the newest
+    snapshot (an agent ticks far faster than a terminal can usefully redraw). JSON output gets
+    every snapshot.
+    """
     key = Keys(namespace).agent_tree if namespace else ANY_AGENT_TREE
     inbox: queue.Queue[bytes] = queue.Queue(maxsize=256)
 
@@ -85,6 +91,8 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
                 sys.stderr.write(f"homebot watch: no tree snapshot on {key} within {timeout_s:.0f} s "
                                  "(is `homebot run` running, and is --connect its --listen endpoint?)\n")
                 return 1
+            if not as_json:
+                payload = _newest(inbox, payload)
             try:
                 data = parse_snapshot(payload)
             except SnapshotError as error:
@@ -97,7 +105,18 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
             out.flush()
             if once:
                 return 0
+            if not as_json:
+                time.sleep(1.0 / refresh_hz)
     except KeyboardInterrupt:
         return 0
     finally:
         subscriber.undeclare()
+
+
+def _newest(inbox: queue.Queue[bytes], payload: bytes) -> bytes:
+    """The last snapshot waiting in ``inbox`` (or ``payload`` if none), dropping older ones."""
+    while True:
+        try:
+            payload = inbox.get_nowait()
+        except queue.Empty:
+            return payload
