@@ -54,6 +54,16 @@ def _parser() -> argparse.ArgumentParser:
     watch.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for a snapshot (default 30)")
     watch.set_defaults(handler=_watch)
 
+    suite = commands.add_parser("suite", help="make scenario suites")
+    suites = suite.add_subparsers(dest="suite", required=True)
+    make = suites.add_parser("make", help="write seeded scenarios as JSON lines, split in parts")
+    make.add_argument("--n", type=int, required=True, help="how many scenarios in all")
+    make.add_argument("--split", default=None, help="part sizes adding up to n, e.g. 300/200 (default: one part)")
+    make.add_argument("--names", default="calib,test", help="part names, comma separated (default calib,test)")
+    make.add_argument("--seed-base", type=int, default=0, help="first seed; parts take consecutive seeds")
+    make.add_argument("--out", type=Path, default=Path("suites"), help="output folder (default ./suites)")
+    make.set_defaults(handler=_suite_make)
+
     bench = commands.add_parser("bench", help="measure speed")
     benches = bench.add_subparsers(dest="bench", required=True)
     step = benches.add_parser("step", help="per-stage time of each step over one fixed episode")
@@ -111,6 +121,31 @@ def _watch(args: argparse.Namespace) -> int:
         return watch(session, args.namespace, args.once, args.json, args.timeout)
     finally:
         session.close()
+
+
+def _suite_make(args: argparse.Namespace) -> int:
+    from worlds.suite import SuiteError, plan_split, write_suite
+
+    try:
+        split = [int(k) for k in args.split.split("/")] if args.split else [args.n]
+    except ValueError:
+        print(f"homebot suite make: --split {args.split!r}: expected sizes like 300/200", file=sys.stderr)
+        return 2
+    names = tuple(n.strip() for n in args.names.split(",") if n.strip()) if len(split) > 1 else ("suite",)
+    try:
+        parts = plan_split(args.n, split, args.seed_base, names)
+    except SuiteError as error:
+        print(f"homebot suite make: {error}", file=sys.stderr)
+        return 2
+
+    def progress(part: str, done: int, total: int) -> None:
+        end = "\n" if done == total else ""
+        print(f"\r  {part}: {done}/{total} scenarios", end=end, file=sys.stderr, flush=True)
+
+    paths = write_suite(args.out, parts, progress)
+    for part in parts:
+        print(f"{paths[part.name]}: seeds {part.seeds.start}..{part.seeds.stop - 1}")
+    return 0
 
 
 def _bench_step(args: argparse.Namespace) -> int:

@@ -20,10 +20,23 @@ class ObservationError(ValueError):
 
 @dataclass(frozen=True)
 class InstanceLabel:
+    """What the camera can tell about one instance in view.
+
+    ``state`` is a visible state (a lamp "on", a door "open"); ``inside`` names the kind of storage
+    the instance sits in when that is visible (a carton seen in an open fridge: "fridge").
+    """
+
     id: int
     category: str
     colour: str
     room: str
+    state: str | None = None
+    inside: str | None = None
+
+    @classmethod
+    def from_meta(cls, entry: dict) -> InstanceLabel:
+        optional = {key: (str(entry[key]) if entry.get(key) is not None else None) for key in ("state", "inside")}
+        return cls(int(entry["id"]), str(entry["category"]), str(entry["colour"]), str(entry["room"]), **optional)
 
 
 @dataclass(frozen=True)
@@ -44,10 +57,7 @@ class Observation:
             intrinsics = Intrinsics.from_meta(meta["camera"])
             pose = np.asarray(meta["camera_pose"], dtype=float)
             base_pose = tuple(float(v) for v in meta["base_pose"])
-            labels = tuple(
-                InstanceLabel(int(e["id"]), str(e["category"]), str(e["colour"]), str(e["room"]))
-                for e in meta["labels"]
-            )
+            labels = tuple(InstanceLabel.from_meta(entry) for entry in meta["labels"])
             rgb, depth, seg = arrays["rgb"], arrays["depth"], arrays["seg"]
         except (KeyError, TypeError, ValueError) as error:
             raise ObservationError(f"observe reply: missing or malformed field ({error!r})") from None

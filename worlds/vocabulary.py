@@ -96,3 +96,18 @@ def parse_question(text: str) -> ParsedQuestion | None:
             slots = {k: v.lower() for k, v in match.groupdict().items()}
             return ParsedQuestion(template, slots.get("category"), slots.get("colour"), slots.get("room"))
     return None
+
+
+#: Furniture with doors or drawers that can hide things ("Is there any milk in the fridge?").
+STORAGE_CATEGORIES = ("cabinet", "drawer chest", "wardrobe", "nightstand", "fridge", "dishwasher", "counter")
+
+#: Things with a visible power state ("Is the lamp in the bedroom on or off?").
+APPLIANCES = ("lamp", "tv", "stove")
+
+#: Words that set apart two rooms of one type ("second bedroom").
+ROOM_ORDINALS = ("second", "third")
+
+
+def room_names() -> tuple[str, ...]:
+    """Every name a room can have: its type, or an ordinal and its type when a type repeats."""
+    return ROOM_TYPES + tuple(f"{ordinal} {room}" for ordinal in ROOM_ORDINALS for room in ROOM_TYPES)

@@ -15,6 +15,14 @@ RELEVANCE_TEMPLATE = (
     "Consider the question: '{question}'. Are you confident about answering the question with the "
     "current view? Answer with Yes or No."
 )
+LSV_TEMPLATE = (
+    "Consider the question: '{question}', and you will explore the environment for answering it. "
+    "Which direction (black letters on the image) would you explore then? Answer with a single letter."
+)
+GSV_TEMPLATE = (
+    "Consider the question: '{question}', and you will explore the environment for answering it. "
+    "Is there any direction shown in the image worth exploring? Answer with Yes or No."
+)
 YES_NO = ("Yes", "No")
 
 _CHOICE_LINE = re.compile(r"^([A-D])\. (.*)$")
@@ -28,6 +36,25 @@ def answer_prompt(question: str, choices: list[str]) -> str:
 
 def relevance_prompt(question: str) -> str:
     return RELEVANCE_TEMPLATE.format(question=question)
+
+
+def lsv_prompt(question: str) -> str:
+    return LSV_TEMPLATE.format(question=question)
+
+
+def gsv_prompt(question: str) -> str:
+    return GSV_TEMPLATE.format(question=question)
+
+
+def prompt_kind(prompt: str) -> str:
+    """Which of the paper's prompts this is: answer, relevance, lsv, gsv, or other."""
+    if read_answer_prompt(prompt) is not None:
+        return "answer"
+    for kind, template in (("relevance", RELEVANCE_TEMPLATE), ("lsv", LSV_TEMPLATE), ("gsv", GSV_TEMPLATE)):
+        tail = template.split("{question}")[1]
+        if prompt.startswith("Consider the question: '") and prompt.endswith(tail):
+            return kind
+    return "other"
 
 
 def read_answer_prompt(prompt: str) -> tuple[str, dict[str, str]] | None:

@@ -4,7 +4,7 @@ how likely is each candidate to be the next token? Probabilities are normalised 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -14,9 +14,13 @@ from agent.observation import Observation
 
 @dataclass(frozen=True)
 class VisualQuery:
+    """An image with a prompt. ``marks`` are letters drawn on the image for visual prompting, as
+    letter -> (u, v) pixel; a backend that sends pixels draws them, the simulator reads them."""
+
     observation: Observation
     prompt: str
     candidates: tuple[str, ...]
+    marks: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
 class VisionLanguageModel(Protocol):

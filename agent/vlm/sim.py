@@ -1,26 +1,25 @@
 """The `sim` VLM backend: a perception-grounded stand-in for a vision-language model.
 
 It sees exactly what a real VLM would be given, and no more: the frame (pixels, depth, and the
-instance segmentation with the labels of the instances in that frame) and the prompt text. It never
-reads the home's hidden ground truth. Its behaviour follows what Explore until Confident reports
-of real VLMs, through explicit parameters (`SimParams`):
+instance segmentation with the labels of the instances in that frame, letters drawn on it for
+visual prompting) and the prompt text. It never reads the home's hidden ground truth: a carton in a
+closed fridge is not in the frame, so it does not exist for the simulator. Its model, with every
+parameter, is described in docs/vlm-sim.md; in short:
 
-- **Noticing.** Each instance that could answer the question is noticed with probability
-  ``skill · (1 − exp(−area_px / notice_area_px)) · exp(−max(0, distance − notice_near_m) / notice_distance_m)``:
-  small or far things are often missed.
-- **Reading.** A noticed instance's asked-for attribute (colour, category, room) is misread with
-  probability ``misread``, becoming another word of the vocabulary.
-- **Answering.** Choices backed by what was noticed get ``evidence_logit``. Without evidence the
-  model still answers confidently from a biased prior: a favourite choice fixed by the question text
-  gets ``prior_logit`` (the over-confidence on irrelevant views that makes entropy a poor stopping
-  signal). Gaussian noise of ``logit_noise`` is added to every logit; padded choices get ``pad_logit``.
-- **Relevance.** P(Yes) for "are you confident" is drawn from a Beta distribution: ``relevance_evidence``
-  when evidence was noticed, ``relevance_room`` when the question's room fills part of the view,
-  ``relevance_none`` otherwise. The Beta spreads make relevance noisy and poorly calibrated.
+- **Noticing.** Each instance that could answer the question is noticed with a probability that
+  grows with its pixel area and falls with its distance, scaled by ``skill``.
+- **Reading.** A noticed attribute (colour, category, room, count) is misread with ``misread``.
+- **Answering.** Choices backed by what was noticed get ``evidence_logit``; without evidence a
+  favourite choice fixed by the question text gets ``prior_logit`` (over-confidence on views that
+  show nothing relevant). Gaussian ``logit_noise`` on every logit; padded choices get ``pad_logit``.
+- **Relevance.** P(Yes) drawn from Beta distributions: noisy and poorly calibrated.
+- **Directions.** LSV and GSV come from a commonsense table of where things are kept
+  (`agent.vlm.commonsense`), the rooms visible around each drawn letter, whether the view leads on
+  through a doorway, and noticed evidence.
 
-Every draw comes from generators seeded by (``seed``, the text, the frame's depth bytes), so the
-same frame and prompt give the same answer. What is noticed depends on the question, not on the
-prompt, so the answer and relevance prompts about one frame agree on what the model saw.
+Draws come from generators seeded by (``seed``, text, the frame's depth bytes), so the same frame
+and prompt give the same answer. What is noticed is seeded by the question, so every prompt about
+one frame agrees on what was seen.
 """
 
 from __future__ import annotations
@@ -30,12 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agent.eqa.prompts import read_answer_prompt, read_quoted_question
+from agent.eqa.prompts import prompt_kind, read_answer_prompt, read_quoted_question
 from agent.observation import InstanceLabel, Observation
+from agent.vlm import commonsense
 from agent.vlm.protocol import VisualQuery, softmax
-from worlds.vocabulary import COLOURS, OBJECTS, PAD_CHOICE, ROOM_TYPES, ParsedQuestion, parse_question
+from worlds.questions import ParsedQuestion, parse_question
+from worlds.vocabulary import COLOURS, OBJECTS, PAD_CHOICE, room_names
 
-_VALUES = {"colour": tuple(COLOURS), "category": tuple(OBJECTS), "room": ROOM_TYPES}
+_MISREAD_WORDS = {"colour": tuple(COLOURS), "category": tuple(OBJECTS), "room": room_names()}
 
 
 @dataclass(frozen=True)
@@ -56,13 +57,15 @@ class SimParams:
     relevance_evidence: tuple[float, float] = (8.0, 2.0)
     relevance_room: tuple[float, float] = (3.0, 4.0)
     relevance_none: tuple[float, float] = (1.5, 4.0)
+    direction_gain: float = 4.0
+    mark_window: float = 0.15  # half-size of the region around a letter, as a share of the image width
 
     def __post_init__(self) -> None:
-        for name in ("skill", "misread"):
+        for name in ("skill", "misread", "mark_window"):
             value = getattr(self, name)
             if not 0.0 <= value <= 1.0:
                 raise ValueError(f"vlm.{name}: {value} must lie in [0, 1]")
-        for name in ("notice_area_px", "notice_distance_m", "logit_noise"):
+        for name in ("notice_area_px", "notice_distance_m", "logit_noise", "direction_gain"):
             if getattr(self, name) < 0:
                 raise ValueError(f"vlm.{name}: must not be negative")
 
@@ -83,20 +86,27 @@ class SimulatedVLM:
         self.params = params
 
     def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        kind = prompt_kind(query.prompt)
         rng = self._generator(query)
-        answer = read_answer_prompt(query.prompt)
-        if answer is not None:
-            question, choices = answer
+        if kind == "answer":
+            question, choices = read_answer_prompt(query.prompt)
             return self._answer(query, rng, question, choices)
-        question = read_quoted_question(query.prompt)
-        if question is not None and set(query.candidates) == {"Yes", "No"}:
-            return self._relevance(query, rng, question)
+        question = read_quoted_question(query.prompt) or ""
+        parsed = parse_question(question)
+        if kind == "relevance" and set(query.candidates) == {"Yes", "No"}:
+            return self._relevance(query, rng, question, parsed)
+        if kind == "gsv" and set(query.candidates) == {"Yes", "No"}:
+            return self._gsv(query, rng, parsed)
+        if kind == "lsv" and query.marks:
+            return self._lsv(query, rng, parsed)
         return {c: 1.0 / len(query.candidates) for c in query.candidates}
 
     def _generator(self, query: VisualQuery, text: str | None = None) -> np.random.Generator:
         frame = zlib.crc32(np.ascontiguousarray(query.observation.depth).tobytes())
         key = zlib.crc32((text if text is not None else query.prompt).encode())
         return np.random.default_rng([self.params.seed, key, frame])
+
+    # --- answers -------------------------------------------------------------------------------
 
     def _answer(self, query: VisualQuery, rng: np.random.Generator, question: str,
                 choices: dict[str, str]) -> dict[str, float]:
@@ -113,66 +123,153 @@ class SimulatedVLM:
         elif real:
             favourite = real[zlib.crc32(question.encode()) % len(real)]
             logits[favourite] += p.prior_logit
-        for i, text in enumerate(texts):
+        for i in range(len(texts)):
             if i not in real:
                 logits[i] = p.pad_logit
         return softmax(candidates, logits)
 
-    def _relevance(self, query: VisualQuery, rng: np.random.Generator, question: str) -> dict[str, float]:
+    def _relevance(self, query: VisualQuery, rng: np.random.Generator, question: str,
+                   parsed: ParsedQuestion | None) -> dict[str, float]:
         p = self.params
-        parsed = parse_question(question)
         if parsed and self._evidence(query.observation, parsed, self._generator(query, question)):
             shape = p.relevance_evidence
-        elif parsed and parsed.room and self._room_fraction(query.observation, parsed.room) >= p.room_view_fraction:
+        elif parsed and parsed.room and _room_fraction(query.observation, parsed.room) >= p.room_view_fraction:
             shape = p.relevance_room
         else:
             shape = p.relevance_none
-        yes = float(rng.beta(*shape))
-        return {c: (yes if c == "Yes" else 1.0 - yes) for c in query.candidates}
+        return _yes_no(query.candidates, float(rng.beta(*shape)))
 
-    def _evidence(self, observation: Observation, question: ParsedQuestion,
-                  rng: np.random.Generator) -> set[str]:
+    def _evidence(self, observation: Observation, question: ParsedQuestion, rng: np.random.Generator) -> set[str]:
         """The lower-cased choice texts that what the model noticed in this frame supports."""
         asks = question.template.asks
-        supported = set()
-        noticed_any = False
-        for sighting in _sightings(observation):
-            label = sighting.label
-            if label.category not in OBJECTS or not self._fits(label, question, asks):
-                continue
-            if rng.random() >= self._notice_probability(sighting):
-                continue
-            noticed_any = True
-            if asks == "yes/no":
-                supported.add("yes")
-                continue
-            value = getattr(label, asks)
+        sightings = _sightings(observation)
+        if asks in ("power", "door"):
+            wanted = question.appliance or question.container
+            noticed = self._noticed([s for s in sightings if s.label.category == wanted
+                                     and s.label.room == question.room], rng)
+            return {s.label.state for s in noticed if s.label.state}
+        noticed = self._noticed([s for s in sightings if s.label.category in OBJECTS
+                                 and _fits(s.label, question)], rng)
+        room_in_view = bool(question.room) and _room_fraction(observation, question.room) >= self.params.room_view_fraction
+        if asks == "yes/no":
+            if noticed:
+                return {"yes"}
+            return {"no"} if self._absence_visible(sightings, question, room_in_view) else set()
+        if asks == "count":
+            if not noticed and not room_in_view:
+                return set()
+            count = len(noticed)
             if rng.random() < self.params.misread:
-                value = str(rng.choice([v for v in _VALUES[asks] if v != value]))
+                count = max(0, count + int(rng.choice([-1, 1])))
+            return {str(count)}
+        supported = set()
+        for sighting in noticed:
+            value = getattr(sighting.label, asks)
+            if rng.random() < self.params.misread:
+                value = str(rng.choice([v for v in _MISREAD_WORDS[asks] if v != value]))
             supported.add(value)
-        if asks == "yes/no" and not noticed_any and question.room:
-            if self._room_fraction(observation, question.room) >= self.params.room_view_fraction:
-                supported.add("no")
         return supported
 
-    @staticmethod
-    def _fits(label: InstanceLabel, question: ParsedQuestion, asks: str) -> bool:
-        for attribute in ("category", "colour", "room"):
-            wanted = getattr(question, attribute)
-            if attribute != asks and wanted is not None and getattr(label, attribute) != wanted:
-                return False
-        return True
+    def _absence_visible(self, sightings: list[_Sighting], question: ParsedQuestion, room_in_view: bool) -> bool:
+        """Whether the frame shows where the thing would be, without it: the room, or the open storage."""
+        if question.container is None:
+            return room_in_view
+        return any(s.label.category == question.container and s.label.room == question.room
+                   and s.label.state == "open" for s in sightings)
 
-    def _notice_probability(self, sighting: _Sighting) -> float:
+    def _noticed(self, sightings: list[_Sighting], rng: np.random.Generator) -> list[_Sighting]:
         p = self.params
-        size = 1.0 - np.exp(-sighting.area_px / p.notice_area_px)
-        distance = np.exp(-max(0.0, sighting.distance_m - p.notice_near_m) / max(p.notice_distance_m, 1e-9))
-        return float(p.skill * size * distance)
+        kept = []
+        for sighting in sightings:
+            size = 1.0 - np.exp(-sighting.area_px / p.notice_area_px)
+            far = max(0.0, sighting.distance_m - p.notice_near_m)
+            chance = p.skill * size * np.exp(-far / max(p.notice_distance_m, 1e-9))
+            if rng.random() < chance:
+                kept.append(sighting)
+        return kept
 
-    @staticmethod
-    def _room_fraction(observation: Observation, room: str) -> float:
-        ids = [label.id for label in observation.labels if label.room == room]
-        return float(np.isin(observation.segmentation, ids).mean()) if ids else 0.0
+    # --- directions (semantic values) ----------------------------------------------------------
+
+    def _gsv(self, query: VisualQuery, rng: np.random.Generator, parsed: ParsedQuestion | None) -> dict[str, float]:
+        """P(Yes) that some direction in view is worth exploring."""
+        value = self._view_value(query.observation, parsed, None)
+        logit = self.params.direction_gain * (value - 0.5) + rng.normal(0.0, self.params.logit_noise)
+        return _yes_no(query.candidates, float(1.0 / (1.0 + np.exp(-logit))))
+
+    def _lsv(self, query: VisualQuery, rng: np.random.Generator, parsed: ParsedQuestion | None) -> dict[str, float]:
+        """P(letter) for the letters drawn on the image: which direction to explore."""
+        observation = query.observation
+        values = np.array([
+            self._view_value(observation, parsed, query.marks[letter]) if letter in query.marks else -1.0
+            for letter in query.candidates
+        ])
+        logits = self.params.direction_gain * values + rng.normal(0.0, self.params.logit_noise, len(values))
+        logits[values < 0] = self.params.pad_logit
+        return softmax(query.candidates, logits)
+
+    def _view_value(self, observation: Observation, question: ParsedQuestion | None,
+                    mark: tuple[float, float] | None) -> float:
+        """How promising the view (or the region around a mark) is for the question, in [0, 1]."""
+        seg = observation.segmentation
+        if mark is not None:
+            half = max(1, int(self.params.mark_window * seg.shape[1]))
+            u, v = int(mark[0]), int(mark[1])
+            seg = seg[max(0, v - half): v + half, max(0, u - half): u + half]
+        labels = {label.id: label for label in observation.labels}
+        ids, counts = np.unique(seg[seg >= 0], return_counts=True)
+        if ids.size == 0:
+            return 0.0
+        target = _target_category(question)
+        rooms: dict[str, int] = {}
+        value = 0.0
+        for instance, count in zip(ids.tolist(), counts.tolist()):
+            label = labels.get(instance)
+            if label is None:
+                continue
+            if label.category == "floor":
+                rooms[label.room] = rooms.get(label.room, 0) + count
+            if target is not None and label.category == target and count >= 20:
+                value = 1.0  # the thing itself is right there
+        if rooms:
+            value = max(value, max(commonsense.affinity(target, room) for room in rooms))
+            here = _room_at_feet(observation)
+            if any(room != here for room in rooms):
+                value = max(value, commonsense.DOORWAY_VALUE + 0.5 * value)
+        return float(min(1.0, value))
+
+
+def _target_category(question: ParsedQuestion | None) -> str | None:
+    if question is None:
+        return None
+    return question.category or question.appliance or question.container
+
+
+def _fits(label: InstanceLabel, question: ParsedQuestion) -> bool:
+    """Whether an instance matches every attribute the question names, except the one it asks."""
+    asks = question.template.asks
+    for attribute in ("category", "colour", "room"):
+        wanted = getattr(question, attribute)
+        if attribute != asks and wanted is not None and getattr(label, attribute) != wanted:
+            return False
+    return question.container is None or label.inside == question.container
+
+
+def _yes_no(candidates: tuple[str, ...], yes: float) -> dict[str, float]:
+    return {c: (yes if c == "Yes" else 1.0 - yes) for c in candidates}
+
+
+def _room_fraction(observation: Observation, room: str) -> float:
+    ids = [label.id for label in observation.labels if label.room == room and label.category == "floor"]
+    return float(np.isin(observation.segmentation, ids).mean()) if ids else 0.0
+
+
+def _room_at_feet(observation: Observation) -> str | None:
+    """The room whose floor fills the bottom middle of the image: where the robot stands."""
+    height, width = observation.segmentation.shape
+    patch = observation.segmentation[int(height * 0.85):, width // 3: 2 * width // 3]
+    floors = {label.id: label.room for label in observation.labels if label.category == "floor"}
+    rooms = [floors[i] for i in patch.ravel().tolist() if i in floors]
+    return max(set(rooms), key=rooms.count) if rooms else None
 
 
 def _sightings(observation: Observation) -> list[_Sighting]:

@@ -1,0 +1,63 @@
+"""What a sensible person expects about homes: where things are usually kept.
+
+The simulated VLM uses this table to value directions (LSV and GSV in Explore until Confident):
+a view into a kitchen is worth exploring for a mug, a view into a bathroom less so. Values are
+affinities in [0, 1]; a pair not listed gets `UNLISTED`.
+"""
+
+from __future__ import annotations
+
+UNLISTED = 0.15
+
+#: category -> {room type: affinity}
+ROOM_AFFINITY: dict[str, dict[str, float]] = {
+    "mug": {"kitchen": 0.9, "dining room": 0.6, "office": 0.5, "living room": 0.4},
+    "cup": {"kitchen": 0.9, "dining room": 0.7, "living room": 0.4},
+    "bowl": {"kitchen": 0.9, "dining room": 0.7},
+    "apple": {"kitchen": 0.9, "dining room": 0.6, "living room": 0.2},
+    "bottle": {"kitchen": 0.8, "dining room": 0.5, "garage": 0.3, "bathroom": 0.3},
+    "milk": {"kitchen": 0.95},
+    "milk carton": {"kitchen": 0.95},
+    "cereal box": {"kitchen": 0.9, "dining room": 0.4},
+    "book": {"office": 0.8, "living room": 0.7, "bedroom": 0.6},
+    "laptop": {"office": 0.9, "living room": 0.5, "bedroom": 0.5},
+    "vase": {"living room": 0.8, "dining room": 0.6, "hallway": 0.5},
+    "plant": {"living room": 0.8, "hallway": 0.5, "office": 0.4, "dining room": 0.4},
+    "clock": {"living room": 0.6, "kitchen": 0.5, "bedroom": 0.5, "office": 0.5},
+    "shoe": {"hallway": 0.9, "bedroom": 0.6, "garage": 0.3},
+    "sock": {"bedroom": 0.9, "laundry room": 0.8, "bathroom": 0.3},
+    "ball": {"garage": 0.6, "living room": 0.5, "bedroom": 0.5},
+    "box": {"garage": 0.8, "office": 0.4, "hallway": 0.3},
+    "toothbrush": {"bathroom": 0.95},
+    "towel": {"bathroom": 0.9, "laundry room": 0.7, "bedroom": 0.3},
+    "remote": {"living room": 0.9, "bedroom": 0.4},
+    "keys": {"hallway": 0.8, "kitchen": 0.5, "living room": 0.4},
+    "lamp": {"living room": 0.8, "bedroom": 0.8, "office": 0.7},
+    "tv": {"living room": 0.9, "bedroom": 0.5},
+    "stove": {"kitchen": 0.99},
+    "fridge": {"kitchen": 0.99},
+    "dishwasher": {"kitchen": 0.95},
+    "wardrobe": {"bedroom": 0.95},
+    "nightstand": {"bedroom": 0.95},
+    "drawer chest": {"bedroom": 0.8, "office": 0.5},
+    "cabinet": {"kitchen": 0.7, "bathroom": 0.6, "office": 0.5, "hallway": 0.4},
+    "counter": {"kitchen": 0.95},
+}
+
+#: How much a view that leads on (through a doorway, into another room) is worth by itself.
+DOORWAY_VALUE = 0.35
+
+
+def room_type(room_name: str) -> str:
+    """The type of a room from its name ("second bedroom" -> "bedroom")."""
+    for prefix in ("second ", "third ", "fourth ", "small ", "large ", "main "):
+        if room_name.startswith(prefix):
+            return room_name[len(prefix):]
+    return room_name
+
+
+def affinity(category: str | None, room_name: str) -> float:
+    """How likely a thing of ``category`` is to be found in a room of this name's type."""
+    if category is None:
+        return UNLISTED
+    return ROOM_AFFINITY.get(category, {}).get(room_type(room_name), UNLISTED)

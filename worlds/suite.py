@@ -1,0 +1,119 @@
+"""Scenario suites: many seeded episodes written as JSON lines, split for calibration and test.
+
+A suite line names everything needed to replay its episode: the seed (the home and the scenario
+are both drawn from it), the scenario itself, and a checksum of the home's scene spec, so a suite
+made by an older generator is caught rather than silently replayed in a different home. Writing
+appends line by line and resumes: lines already in a file are kept and not made again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from worlds.home import generate_home
+from worlds.scenario import make_scenario
+
+log = logging.getLogger(__name__)
+
+SUITE_FORMAT = "homebot-suite"
+SUITE_VERSION = 1
+
+
+class SuiteError(ValueError):
+    """A suite file or request that cannot be used; the text names the line or field."""
+
+
+@dataclass(frozen=True)
+class SuitePart:
+    """One output file of a suite: its name and the seeds it holds."""
+
+    name: str
+    seeds: range
+
+
+def plan_split(n: int, split: list[int], seed_base: int, names: tuple[str, ...] = ("calib", "test")) -> list[SuitePart]:
+    """Consecutive seed ranges for each part; ``split`` must add up to ``n``."""
+    if n <= 0:
+        raise SuiteError(f"n: {n} must be positive")
+    if sum(split) != n or any(k <= 0 for k in split):
+        raise SuiteError(f"split: {'/'.join(map(str, split))} must be positive sizes adding up to n={n}")
+    if len(split) > len(names):
+        names = names + tuple(f"part{i}" for i in range(len(names), len(split)))
+    parts, start = [], seed_base
+    for name, size in zip(names, split):
+        parts.append(SuitePart(name, range(start, start + size)))
+        start += size
+    return parts
+
+
+def spec_checksum(spec: dict[str, Any]) -> str:
+    """SHA-256 of the scene spec's canonical JSON."""
+    return hashlib.sha256(json.dumps(spec, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def suite_line(seed: int, part: str, index: int) -> dict[str, Any]:
+    """The suite entry for ``seed``: the scenario and the checksum of its home."""
+    home = generate_home(seed)
+    scenario = make_scenario(home, seed)
+    return {
+        "format": SUITE_FORMAT,
+        "version": SUITE_VERSION,
+        "id": f"{part}-{index:04d}",
+        "seed": seed,
+        "home_sha256": spec_checksum(home.to_dict()),
+        "area_m2": round(home.area_m2, 2),
+        "rooms": len(home.rooms),
+        "scenario": scenario.to_dict(),
+    }
+
+
+def write_suite(out_dir: Path, parts: list[SuitePart],
+                progress: Callable[[str, int, int], None] | None = None) -> dict[str, Path]:
+    """Write each part to ``<out_dir>/<name>.jsonl``, appending and resuming; return the paths."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for part in parts:
+        path = out_dir / f"{part.name}.jsonl"
+        done = {entry["seed"] for entry in read_suite(path)} if path.exists() else set()
+        with open(path, "a", encoding="utf-8") as out:
+            for index, seed in enumerate(part.seeds):
+                if seed not in done:
+                    out.write(json.dumps(suite_line(seed, part.name, index), ensure_ascii=False) + "\n")
+                    out.flush()
+                if progress:
+                    progress(part.name, index + 1, len(part.seeds))
+        paths[part.name] = path
+    return paths
+
+
+def read_suite(path: Path) -> list[dict[str, Any]]:
+    """Every entry of a suite file, checked; a torn last line (an interrupted write) is dropped."""
+    entries = []
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    for number, line in enumerate(lines, start=1):
+        try:
+            entry = json.loads(line)
+        except json.JSONDecodeError:
+            if number == len(lines):
+                log.warning("%s: dropping a torn last line", path)
+                break
+            raise SuiteError(f"{path}:{number}: not valid JSON") from None
+        _check_entry(entry, f"{path}:{number}")
+        entries.append(entry)
+    return entries
+
+
+def _check_entry(entry: Any, where: str) -> None:
+    if not isinstance(entry, dict):
+        raise SuiteError(f"{where}: expected a JSON object")
+    if entry.get("format") != SUITE_FORMAT or entry.get("version") != SUITE_VERSION:
+        raise SuiteError(f"{where}: format/version must be {SUITE_FORMAT!r}/{SUITE_VERSION}")
+    for key, kind in (("id", str), ("seed", int), ("home_sha256", str), ("scenario", dict)):
+        if not isinstance(entry.get(key), kind) or isinstance(entry.get(key), bool):
+            raise SuiteError(f"{where}: {key} must be a {kind.__name__}")
