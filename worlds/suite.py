@@ -80,7 +80,7 @@ def write_suite(out_dir: Path, parts: list[SuitePart],
     paths = {}
     for part in parts:
         path = out_dir / f"{part.name}.jsonl"
-        done = {entry["seed"] for entry in read_suite(path)} if path.exists() else set()
+        done = {entry["seed"] for entry in _kept_entries(path)} if path.exists() else set()
         with open(path, "a", encoding="utf-8") as out:
             for index, seed in enumerate(part.seeds):
                 if seed not in done:
@@ -90,6 +90,15 @@ def write_suite(out_dir: Path, parts: list[SuitePart],
                     progress(part.name, index + 1, len(part.seeds))
         paths[part.name] = path
     return paths
+
+
+def _kept_entries(path: Path) -> list[dict[str, Any]]:
+    """The file's whole entries, rewriting it without a torn last line so appends start clean."""
+    entries = read_suite(path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    if len(lines) != len(entries) or not path.read_text(encoding="utf-8").endswith("\n"):
+        path.write_text("".join(json.dumps(e, ensure_ascii=False) + "\n" for e in entries), encoding="utf-8")
+    return entries
 
 
 def read_suite(path: Path) -> list[dict[str, Any]]:

@@ -1,0 +1,92 @@
+"""The simulated VLM on the other question kinds: counting, states, hidden evidence, directions."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from agent.eqa.prompts import YES_NO, answer_prompt, gsv_prompt, lsv_prompt
+from agent.mapping.camera import Intrinsics
+from agent.observation import InstanceLabel, Observation
+from agent.vlm.protocol import VisualQuery
+from agent.vlm.sim import SimParams, SimulatedVLM
+from worlds.vocabulary import LETTERS, PAD_CHOICE
+
+H, W = 60, 80
+INTRINSICS = Intrinsics(W, H, 40.0, 40.0, 40.0, 30.0)
+SHARP = SimulatedVLM(SimParams(skill=1.0, misread=0.0, notice_area_px=10.0))  # sees all that is near
+
+
+def frame(index: int, boxes: list[tuple[InstanceLabel, tuple[int, int, int, int]]],
+          floor_rooms: tuple[str, str] = ("kitchen", "kitchen")) -> Observation:
+    """Left and right halves of the lower image are floors of two rooms; boxes are (row, col, h, w)."""
+    depth = np.full((H, W), 1.5 + index * 1e-3, dtype=np.float32)
+    seg = np.full((H, W), -1, dtype=np.int32)
+    seg[H // 2:, : W // 2] = 1
+    seg[H // 2:, W // 2:] = 2
+    labels = [InstanceLabel(1, "floor", "grey", floor_rooms[0]), InstanceLabel(2, "floor", "grey", floor_rooms[1])]
+    for label, (row, col, height, width) in boxes:
+        seg[row: row + height, col: col + width] = label.id
+        labels.append(label)
+    labels = list({label.id: label for label in labels}.values())
+    present = set(np.unique(seg).tolist())
+    return Observation(np.zeros((H, W, 3), np.uint8), depth, seg, tuple(l for l in labels if l.id in present),
+                       INTRINSICS, np.eye(4), (0.0, 0.0, 0.0))
+
+
+def best(vlm: SimulatedVLM, observation: Observation, question: str, choices: list[str]) -> str:
+    probs = vlm.probabilities(VisualQuery(observation, answer_prompt(question, choices), LETTERS))
+    return choices[LETTERS.index(max(probs, key=probs.__getitem__))]
+
+
+def test_counts_what_it_sees() -> None:
+    mugs = [(InstanceLabel(10 + k, "mug", "red", "kitchen"), (32, 5 + 20 * k, 12, 12)) for k in range(3)]
+    question = "How many mugs are there in the kitchen?"
+    answers = [best(SHARP, frame(i, mugs), question, ["1", "2", "3", "4"]) for i in range(10)]
+    assert answers.count("3") >= 9
+
+
+def test_reads_a_visible_power_state() -> None:
+    question = "Is the lamp in the kitchen on or off?"
+    for state, expected in (("on", "On"), ("off", "Off")):
+        lamp = InstanceLabel(20, "lamp", "white", "kitchen", state=state)
+        answers = [best(SHARP, frame(i, [(lamp, (5, 30, 20, 10))]), question, ["On", "Off", PAD_CHOICE, PAD_CHOICE])
+                   for i in range(10)]
+        assert answers.count(expected) >= 9, (state, answers)
+
+
+def test_a_hidden_bottle_is_seen_only_in_an_open_fridge() -> None:
+    question = "Is there any bottle in the fridge in the kitchen?"
+    choices = ["Yes", "No", PAD_CHOICE, PAD_CHOICE]
+    closed = InstanceLabel(30, "fridge", "white", "kitchen", state="closed")
+    opened = InstanceLabel(30, "fridge", "white", "kitchen", state="open")
+    milk = InstanceLabel(31, "bottle", "white", "kitchen", inside="fridge")
+    vlm = SimulatedVLM(SimParams(skill=1.0, misread=0.0, notice_area_px=10.0, seed=3))
+    closed_frames = [frame(i, [(closed, (0, 20, 40, 40))]) for i in range(30)]
+    open_frames = [frame(i, [(opened, (0, 20, 40, 40)), (milk, (10, 30, 15, 10))]) for i in range(30)]
+    empty_open = [frame(i, [(opened, (0, 20, 40, 40))]) for i in range(30)]
+    # Closed: no evidence either way, so the answer is the question's fixed favourite every time.
+    assert len({best(vlm, f, question, choices) for f in closed_frames}) == 1
+    assert [best(vlm, f, question, choices) for f in open_frames].count("Yes") >= 28
+    assert [best(vlm, f, question, choices) for f in empty_open].count("No") >= 28
+
+
+def lsv(vlm: SimulatedVLM, observation: Observation, question: str, marks: dict[str, tuple[float, float]]) -> dict:
+    return vlm.probabilities(VisualQuery(observation, lsv_prompt(question), ("A", "B"), marks))
+
+
+def test_lsv_points_toward_the_room_where_such_things_are_kept() -> None:
+    question = "Is there a red toothbrush in the bathroom?"
+    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the bedroom floor, B over the bathroom's
+    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("bedroom", "bathroom")), question, marks)["B"] > 0.5
+               for s in range(20))
+    assert wins >= 17
+
+
+def test_gsv_is_higher_for_views_of_likely_rooms() -> None:
+    question = "Is there a red mug in the kitchen?"
+
+    def gsv(room: str, index: int) -> float:
+        probs = SimulatedVLM().probabilities(VisualQuery(frame(index, [], (room, room)), gsv_prompt(question), YES_NO))
+        return probs["Yes"]
+
+    assert np.mean([gsv("kitchen", i) for i in range(30)]) > np.mean([gsv("garage", i) for i in range(30)]) + 0.2
