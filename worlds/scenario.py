@@ -1,30 +1,39 @@
 """An EQA scenario for a home: one multiple-choice question, its answer, a budget and a start pose.
 
-Questions come from `vocabulary.TEMPLATES` and are only asked when the home makes them unambiguous:
-'What colour is the mug in the kitchen?' needs exactly one mug in the kitchen, 'Which room is the
-red mug in?' exactly one red mug in the home, 'Which object in the kitchen is red?' exactly one red
-thing in the kitchen (furniture included), and existence questions are 'yes' half of the time and
-otherwise name a colour/category/room triple that truly is not there. Draws come from a generator
-seeded with (seed, 1), a stream apart from the home's own.
+The question's category is drawn with the paper's shares (`questions.CATEGORY_SHARES`), then a
+template of that category the home can ask unambiguously: 'What colour is the mug in the kitchen?'
+needs exactly one mug in the kitchen that can be seen, 'Is there any milk carton in the fridge in
+the kitchen?' exactly one closed fridge in the kitchen. Only hidden-evidence templates ask about
+what is out of sight; the others count and name only what looking can find. Four choices, padded
+with `PAD_CHOICE` when fewer are real, shuffled except yes/no, on/off and open/closed, and counts,
+which stay in their natural order. Draws come from a generator seeded with (seed, 1), a stream
+apart from the home's own.
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from worlds.facts import HomeFacts
 from worlds.freespace import clearance, free_space
 from worlds.home import HomeSpec
+from worlds.questions import CATEGORY_SHARES, ON_OFF, OPEN_CLOSED, TEMPLATES, YES_NO, Template, format_question
 from worlds.robot import ROBOT_RADIUS
-from worlds.vocabulary import COLOURS, LETTERS, OBJECTS, PAD_CHOICE, ROOM_TYPES, TEMPLATES, Template
+from worlds.vocabulary import COLOURS, LETTERS, OBJECTS, PAD_CHOICE, ROOM_TYPES
 
 #: The start pose keeps at least this much space to walls, furniture and floor objects.
 START_CLEARANCE = 0.5
 _SCENARIO_STREAM = 1
+MAX_COUNT = 6
+
+Slots = dict[str, str]
+Draw = tuple[Slots, str, list[str]]  # the slots the question names, the answer text, the choices
 
 
 @dataclass(frozen=True)
@@ -38,7 +47,7 @@ class Scenario:
     answer_text: str
     kind: str
     asks: str
-    target: dict[str, str | None]
+    target: dict[str, str | None]  # the slots the question names; None for those it does not
     budget: int
     start_pose: tuple[float, float, float]
 
@@ -66,97 +75,211 @@ def budget_for(area_m2: float) -> int:
     return int(3 * math.sqrt(area_m2))
 
 
-def make_scenario(home: HomeSpec, seed: int) -> Scenario:
-    """Draw a question the home answers unambiguously, its shuffled choices and a clear start pose."""
+def make_scenario(home: HomeSpec, seed: int, kinds: tuple[str, ...] | None = None,
+                  hidden: bool | None = None) -> Scenario:
+    """Draw a question the home answers unambiguously, its choices and a clear start pose.
+
+    ``kinds`` limits the categories (default: all, drawn with the paper's shares); ``hidden``
+    True asks only hidden-evidence questions, False never, None either.
+    """
     rng = np.random.default_rng([seed, _SCENARIO_STREAM])
-    for index in rng.permutation(len(TEMPLATES)):
-        template = TEMPLATES[int(index)]
-        drawn = _draw_question(rng, home, template)
+    facts = HomeFacts(home)
+    templates = [t for t in TEMPLATES if (kinds is None or t.kind in kinds) and (hidden is None or t.hidden == hidden)]
+    if not templates:
+        raise ValueError(f"no question template has kinds={kinds} and hidden={hidden}")
+    for template in _template_order(rng, templates):
+        drawn = _DRAWERS[template.text](rng, facts)
         if drawn is not None:
             break
     else:
-        raise RuntimeError(f"home {home.seed}: no template has an unambiguous target")
-    target, answer_text, distractors = drawn
-    if template.asks == "yes/no":
-        choices = ["Yes", "No", PAD_CHOICE, PAD_CHOICE]
-    else:
-        choices = [answer_text, *distractors]
-        choices = [choices[int(i)] for i in rng.permutation(len(choices))]
+        raise RuntimeError(f"home {home.seed}: no question of kinds={kinds}, hidden={hidden} is unambiguous here")
+    slots, answer_text, choices = drawn
     return Scenario(
         seed=seed,
-        question=template.text.format(**{k: v for k, v in target.items() if v is not None}),
+        question=format_question(template, **slots),
         choices=(choices[0], choices[1], choices[2], choices[3]),
         answer=LETTERS[choices.index(answer_text)],
         answer_text=answer_text,
         kind=template.kind,
         asks=template.asks,
-        target=target,
+        target={key: slots.get(key) for key in ("category", "colour", "room", "container", "appliance")},
         budget=budget_for(home.area_m2),
         start_pose=start_pose(home, rng),
     )
 
 
-def _draw_question(
-    rng: np.random.Generator, home: HomeSpec, template: Template
-) -> tuple[dict[str, str | None], str, list[str]] | None:
-    """(target slots, answer text, three distractors) for ``template``, or None if none is unambiguous."""
-    objects = home.objects
-    if template.asks == "yes/no":
-        return _existence(rng, home)
-    if template.asks == "category":  # Which object in the {room} is {colour}?
-        things = Counter((o.room, o.colour) for o in objects) + Counter((f.room, f.colour) for f in home.furniture)
-        unique = [o for o in objects if things[(o.room, o.colour)] == 1]
-        slots = ("room", "colour")
-    elif template.asks == "colour":  # What colour is the {category} in the {room}?
-        counts = Counter((o.room, o.category) for o in objects)
-        unique = [o for o in objects if counts[(o.room, o.category)] == 1]
-        slots = ("room", "category")
-    else:  # Which room is the {colour} {category} in?
-        counts = Counter((o.colour, o.category) for o in objects)
-        unique = [o for o in objects if counts[(o.colour, o.category)] == 1]
-        slots = ("colour", "category")
-    if not unique:
-        return None
-    item = unique[int(rng.integers(len(unique)))]
-    answer = getattr(item, template.asks)
-    target: dict[str, str | None] = {"category": None, "colour": None, "room": None}
-    for slot in slots:
-        target[slot] = getattr(item, slot)
-    return target, answer, _distractors(rng, home, template.asks, answer)
+def _template_order(rng: np.random.Generator, templates: list[Template]) -> list[Template]:
+    """Templates in a random order whose first pick follows the paper's category shares."""
+    weights = np.array([CATEGORY_SHARES[t.kind] / sum(u.kind == t.kind for u in templates) for t in templates])
+    order = rng.choice(len(templates), size=len(templates), replace=False, p=weights / weights.sum())
+    return [templates[int(i)] for i in order]
 
 
-def _distractors(rng: np.random.Generator, home: HomeSpec, asks: str, answer: str) -> list[str]:
-    """Three wrong choices; for rooms, the home's other rooms first, so every choice is plausible."""
-    if asks == "room":
-        here = [r.name for r in home.rooms if r.name != answer]
-        elsewhere = [r for r in ROOM_TYPES if r != answer and r not in here]
-        pools = [here, elsewhere]
-    else:
-        pools = [[w for w in (OBJECTS if asks == "category" else COLOURS) if w != answer]]
+def _pick(rng: np.random.Generator, options: list[Any]) -> Any:
+    return options[int(rng.integers(len(options)))]
+
+
+def _shuffled(rng: np.random.Generator, answer: str, distractors: list[str]) -> list[str]:
+    choices = [answer, *distractors]
+    return [choices[int(i)] for i in rng.permutation(len(choices))]
+
+
+def _padded(choices: tuple[str, ...]) -> list[str]:
+    return [*choices, *[PAD_CHOICE] * (4 - len(choices))]
+
+
+def _words_but(rng: np.random.Generator, words: list[str], answer: str, preferred: list[str] | None = None) -> list[str]:
+    """Three words other than ``answer``, from ``preferred`` first (so every choice is plausible)."""
     chosen: list[str] = []
-    for pool in pools:
+    for pool in (preferred or [], words):
+        pool = [w for w in dict.fromkeys(pool) if w != answer and w not in chosen]
         take = min(3 - len(chosen), len(pool))
-        chosen += [pool[int(i)] for i in rng.choice(len(pool), size=take, replace=False)]
+        chosen += [pool[int(i)] for i in rng.choice(len(pool), size=take, replace=False)] if take else []
     return chosen
 
 
-def _existence(rng: np.random.Generator, home: HomeSpec) -> tuple[dict[str, str | None], str, list[str]]:
-    """Yes half of the time (a real object); otherwise a near miss that is truly absent."""
-    present = {(o.colour, o.category, o.room) for o in home.objects}
+def _object_colour_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Which object in the {room} is {colour}? (one visible thing of that colour in the room)"""
+    things = Counter((o.room, o.colour) for o in facts.home.objects)
+    things += Counter((f.room, f.colour) for f in facts.home.furniture)
+    unique = [o for o in facts.visible_objects() if things[(o.room, o.colour)] == 1]
+    if not unique:
+        return None
+    item = _pick(rng, unique)
+    return {"room": item.room, "colour": item.colour}, item.category, _shuffled(
+        rng, item.category, _words_but(rng, list(OBJECTS), item.category))
+
+
+def _colour_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """What colour is the {category} in the {room}? (one such object in the room, visible)"""
+    counts = Counter((o.room, o.category) for o in facts.home.objects)
+    unique = [o for o in facts.visible_objects() if counts[(o.room, o.category)] == 1]
+    if not unique:
+        return None
+    item = _pick(rng, unique)
+    return {"room": item.room, "category": item.category}, item.colour, _shuffled(
+        rng, item.colour, _words_but(rng, list(COLOURS), item.colour))
+
+
+def _unique_storage(facts: HomeFacts, closed: bool) -> list:
+    counts = Counter((f.room, f.category) for f in facts.storage())
+    return [f for f in facts.storage() if counts[(f.room, f.category)] == 1 and facts.is_open(f) != closed]
+
+
+def _inside_storage(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """What is inside the {container} in the {room}? (a closed piece holding exactly one object)"""
+    holding = {}
+    for item in facts.home.objects:
+        storage = facts.storage_of(item)
+        if storage is not None and facts.is_hidden(item):
+            holding.setdefault(storage.instance_id, []).append(item)
+    options = [f for f in _unique_storage(facts, closed=True) if len(holding.get(f.instance_id, [])) == 1]
+    if not options:
+        return None
+    storage = _pick(rng, options)
+    item = holding[storage.instance_id][0]
+    return {"container": storage.category, "room": storage.room}, item.category, _shuffled(
+        rng, item.category, _words_but(rng, list(OBJECTS), item.category))
+
+
+def _count_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """How many {plural} are there in the {room}? (all of them in view: none hidden)"""
+    counts = Counter((o.room, o.category) for o in facts.home.objects)
+    hidden = {(o.room, o.category) for o in facts.home.objects if facts.is_hidden(o)}
+    options = sorted(key for key, n in counts.items() if key not in hidden and n <= MAX_COUNT)
+    if not options:
+        return None
+    room, category = _pick(rng, options)
+    answer = counts[(room, category)]
+    others = [n for n in range(MAX_COUNT + 1) if n != answer]
+    numbers = sorted([answer, *(others[int(i)] for i in rng.choice(len(others), size=3, replace=False))])
+    return {"room": room, "category": category}, str(answer), [str(n) for n in numbers]
+
+
+def _exists_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Is there a {colour} {category} in the {room}? Yes about a visible object, else a near miss."""
+    present = {(o.colour, o.category, o.room) for o in facts.home.objects}
+    visible = sorted({(o.colour, o.category, o.room) for o in facts.visible_objects()})
+    if not visible:
+        return None
     if rng.random() < 0.5:
-        colour, category, room = sorted(present)[int(rng.integers(len(present)))]
-        return {"category": category, "colour": colour, "room": room}, "Yes", []
-    rooms = [r.name for r in home.rooms]
-    colours = list(COLOURS)
-    while True:  # a near miss: a real object with its colour or its room changed
-        base = home.objects[int(rng.integers(len(home.objects)))]
-        if rng.random() < 0.5:
-            triple = (colours[int(rng.integers(len(colours)))], base.category, base.room)
+        colour, category, room = _pick(rng, visible)
+        answer = "Yes"
+    else:
+        rooms = [r.name for r in facts.home.rooms]
+        for _ in range(100):  # a near miss: a real object with its colour or its room changed
+            colour, category, room = _pick(rng, visible)
+            if rng.random() < 0.5:
+                colour = _pick(rng, list(COLOURS))
+            else:
+                room = _pick(rng, rooms)
+            if (colour, category, room) not in present:
+                break
         else:
-            triple = (base.colour, base.category, rooms[int(rng.integers(len(rooms)))])
-        if triple not in present:
-            colour, category, room = triple
-            return {"category": category, "colour": colour, "room": room}, "No", []
+            return None
+        answer = "No"
+    return {"colour": colour, "category": category, "room": room}, answer, _padded(YES_NO)
+
+
+def _exists_in_storage(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Is there any {category} in the {container} in the {room}? (closed storage: act to know)"""
+    options = _unique_storage(facts, closed=True)
+    if not options:
+        return None
+    storage = _pick(rng, options)
+    inside = {o.category for o in facts.home.objects if facts.storage_of(o) is storage}
+    if inside and rng.random() < 0.5:
+        category, answer = _pick(rng, sorted(inside)), "Yes"
+    else:
+        category, answer = _pick(rng, sorted(set(OBJECTS) - inside)), "No"
+    return {"category": category, "container": storage.category, "room": storage.room}, answer, _padded(YES_NO)
+
+
+def _power_state(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Is the {appliance} in the {room} on or off?"""
+    counts = Counter((f.room, f.category) for f in facts.appliances())
+    options = [f for f in facts.appliances() if counts[(f.room, f.category)] == 1]
+    if not options:
+        return None
+    appliance = _pick(rng, options)
+    answer = "On" if appliance.state["power"] == "on" else "Off"
+    return {"appliance": appliance.category, "room": appliance.room}, answer, _padded(ON_OFF)
+
+
+def _door_state(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Is the {container} in the {room} open or closed?"""
+    options = _unique_storage(facts, closed=True) + _unique_storage(facts, closed=False)
+    if not options:
+        return None
+    storage = _pick(rng, sorted(options, key=lambda f: f.instance_id))
+    answer = "Open" if facts.is_open(storage) else "Closed"
+    return {"container": storage.category, "room": storage.room}, answer, _padded(OPEN_CLOSED)
+
+
+def _room_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
+    """Which room is the {colour} {category} in? (one such object in the home, visible)"""
+    counts = Counter((o.colour, o.category) for o in facts.home.objects)
+    unique = [o for o in facts.visible_objects() if counts[(o.colour, o.category)] == 1]
+    if not unique:
+        return None
+    item = _pick(rng, unique)
+    here = [r.name for r in facts.home.rooms]
+    return {"colour": item.colour, "category": item.category}, item.room, _shuffled(
+        rng, item.room, _words_but(rng, list(ROOM_TYPES), item.room, preferred=here))
+
+
+#: How to draw each template's question, by the template's text.
+_DRAWERS: dict[str, Callable[[np.random.Generator, HomeFacts], Draw | None]] = {
+    "Which object in the {room} is {colour}?": _object_colour_in_room,
+    "What colour is the {category} in the {room}?": _colour_of_object,
+    "What is inside the {container} in the {room}?": _inside_storage,
+    "How many {plural} are there in the {room}?": _count_in_room,
+    "Is there a {colour} {category} in the {room}?": _exists_in_room,
+    "Is there any {category} in the {container} in the {room}?": _exists_in_storage,
+    "Is the {appliance} in the {room} on or off?": _power_state,
+    "Is the {container} in the {room} open or closed?": _door_state,
+    "Which room is the {colour} {category} in?": _room_of_object,
+}
 
 
 def start_pose(home: HomeSpec, rng: np.random.Generator) -> tuple[float, float, float]:
