@@ -10,6 +10,7 @@ import pytest
 
 from worlds.robot import ROBOT_RADIUS, CameraConfig
 from worlds.sim import MAX_STEP, World
+from worlds.storage import home_part_labels
 from worlds.things import point_rect_distance
 
 
@@ -46,9 +47,8 @@ def test_same_seed_renders_the_same_frame(sim: World) -> None:
 
 def test_the_robot_never_sees_its_own_body(sim: World) -> None:
     frame = sim.observe()
-    bottom = frame.depth[-5:]
-    assert (bottom > 0).all()
-    assert bottom.min() > sim.camera.mount_height_m * 0.9  # the floor ahead, not the robot's top
+    assert (frame.depth[-5:] > 0).all()
+    assert (frame.seg[frame.depth > 0] >= 0).all()  # every surface hit is a labelled thing; the robot is not one
     assert sim.contact() is None  # observing leaves the body where it was
 
 
@@ -72,3 +72,72 @@ def test_moving_into_a_known_wall_stops_just_before_it(sim: World) -> None:
     assert east_wall_face - ROBOT_RADIUS - MAX_STEP - 0.01 < result.base_pose[0] < east_wall_face - ROBOT_RADIUS
     assert result.base_pose[1] == pytest.approx(y) and result.base_pose[2] == pytest.approx(0.0)
     assert sim.contact() is None
+
+
+def _home_with_something_in_a_drawer(world: World) -> tuple[int, str, int]:
+    """Reset ``world`` to the first home with an object standing in a closed drawer: (piece, drawer, object)."""
+    for seed in range(40):
+        world.reset(seed)
+        for item in world.home.objects:
+            piece = next((f for f in world.home.furniture if f.instance_id == item.parent), None)
+            if piece is None or piece.storage is None or item.slot is None:
+                continue
+            drawer = piece.storage.slot(item.slot).part
+            if drawer is not None and piece.joints.get(drawer, 0.0) == 0.0:
+                return piece.instance_id, drawer, item.instance_id
+    pytest.fail("no home with an object in a closed drawer")
+
+
+def test_storage_parts_start_at_the_homes_joint_states(sim: World) -> None:
+    states = sim.part_states()
+    pieces = {f.instance_id: f for f in sim.home.furniture if f.storage is not None}
+    assert set(states) == set(pieces)
+    for furniture_id, parts in states.items():
+        piece = pieces[furniture_id]
+        assert set(parts) == {part.name for part in piece.storage.parts}
+        for name, value in parts.items():
+            assert value == pytest.approx(piece.joints.get(name, 0.0), abs=1e-9)
+
+
+def test_what_stands_in_a_drawer_moves_with_it(sim: World) -> None:
+    piece_id, drawer, item_id = _home_with_something_in_a_drawer(sim)
+    piece = next(f for f in sim.home.furniture if f.instance_id == piece_id)
+    upper = piece.storage.part(drawer).upper
+    before = np.array(sim.object_position(item_id))
+    sim.set_part_state(piece_id, drawer, upper)
+    moved = np.array(sim.object_position(item_id)) - before
+    facing = np.array([math.cos(piece.facing), math.sin(piece.facing), 0.0])
+    assert moved == pytest.approx(upper * facing, abs=1e-6)
+    assert sim.part_states()[piece_id][drawer] == pytest.approx(upper)
+    sim.set_part_state(piece_id, drawer, 0.0)
+    assert np.array(sim.object_position(item_id)) == pytest.approx(before, abs=1e-6)
+
+
+def test_a_hidden_object_shows_once_its_drawer_is_open(sim: World) -> None:
+    piece_id, drawer, item_id = _home_with_something_in_a_drawer(sim)
+    piece = next(f for f in sim.home.furniture if f.instance_id == piece_id)
+    sim.set_part_state(piece_id, drawer, piece.storage.part(drawer).upper)
+    x, y, _ = sim.object_position(item_id)
+    heading = math.atan2(-math.sin(piece.facing), -math.cos(piece.facing))
+    sim.place((x + 1.0 * math.cos(piece.facing), y + 1.0 * math.sin(piece.facing), heading))
+    seen = sim.observe()
+    sim.set_part_state(piece_id, drawer, 0.0)
+    hidden = sim.observe()
+    assert (seen.seg == item_id).any()
+    assert not (hidden.seg == item_id).any()
+    truth = {**sim.home.labels(), **home_part_labels(sim.home)}  # the drawer and its handle have ids of their own
+    for frame in (seen, hidden):
+        assert all(label == truth[label["id"]] for label in frame.labels)
+    assert {"drawer", "handle"} <= {label["category"] for label in seen.labels}
+
+
+def test_set_part_state_rejects_what_is_not_there(sim: World) -> None:
+    piece = next(f for f in sim.home.furniture if f.storage is not None)
+    part = piece.storage.parts[0]
+    plain = next((f for f in sim.home.furniture if f.storage is None), None)
+    with pytest.raises(ValueError, match="part_name"):
+        sim.set_part_state(piece.instance_id, "lid_9", 0.0)
+    with pytest.raises(ValueError, match="outside"):
+        sim.set_part_state(piece.instance_id, part.name, part.upper + 0.1)
+    with pytest.raises(ValueError, match="furniture_id"):
+        sim.set_part_state(plain.instance_id if plain else 10_000, part.name, 0.0)

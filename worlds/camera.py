@@ -2,8 +2,9 @@
 
 PyBullet's depth buffer is non-linear; it is turned into metres along the optical axis with
 z = far·near / (far − (far − near)·d), and pixels at the far plane (nothing hit) become 0, meaning
-"no return". The segmentation comes back in body ids and is translated into the home's instance
-ids, so the frame speaks the same language as the labels that travel with it.
+"no return". The segmentation comes back per body and link and is translated into the scene's
+instance ids (a storage piece's doors, drawers and handles have ids of their own), so the frame
+speaks the same language as the labels that travel with it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,9 @@ import pybullet as p
 
 from worlds.robot import CameraConfig, camera_pose
 from worlds.things import Label
+
+#: (body, link) -> label, link -1 labelling every link of the body without a label of its own.
+SegLabels = dict[tuple[int, int], Label]
 
 #: Depth-buffer values this close to 1 are the far plane: no surface there.
 _FAR_PLANE = 1.0 - 1e-6
@@ -56,7 +60,7 @@ def render(
     client: int,
     camera: CameraConfig,
     base_pose: tuple[float, float, float],
-    body_labels: dict[int, Label],
+    labels: SegLabels,
 ) -> Frame:
     """Render what the head camera sees from ``base_pose``; labels only for instances in the frame."""
     pose = camera_pose(base_pose, camera)
@@ -68,23 +72,30 @@ def render(
         view,
         projection,
         renderer=p.ER_TINY_RENDERER,
+        flags=p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX,
         physicsClientId=client,
     )
     render_ms = (time.perf_counter() - started) * 1000.0
     shape = (camera.height, camera.width)
     rgb = np.asarray(rgba, dtype=np.uint8).reshape(*shape, 4)[..., :3].copy()
     depth = linear_depth(np.asarray(depth_buffer).reshape(shape), camera.near, camera.far)
-    seg = _instances(np.asarray(body_seg, dtype=np.int64).reshape(shape), body_labels)
+    seg = _instances(np.asarray(body_seg, dtype=np.int64).reshape(shape), labels)
     present = {int(i) for i in np.unique(seg) if i >= 0}
-    labels = sorted((label for label in body_labels.values() if label["id"] in present), key=lambda l: l["id"])
-    return Frame(rgb, depth, seg, labels, pose, render_ms)
+    seen = {label["id"]: label for label in labels.values() if label["id"] in present}
+    return Frame(rgb, depth, seg, [seen[i] for i in sorted(seen)], pose, render_ms)
 
 
-def _instances(body_seg: np.ndarray, body_labels: dict[int, Label]) -> np.ndarray:
-    """Body ids (-1 for background, or an unlabelled body) to instance ids (-1 for nothing)."""
-    lookup = np.full(max(body_labels, default=0) + 2, -1, dtype=np.int32)
-    for body, label in body_labels.items():
-        lookup[body + 1] = label["id"]
-    index = np.clip(body_seg + 1, 0, lookup.size - 1)
-    index[body_seg + 1 >= lookup.size] = 0
-    return lookup[index]
+def _instances(raw: np.ndarray, labels: SegLabels) -> np.ndarray:
+    """Packed body + (link + 1) << 24 values (-1: background) to instance ids (-1: nothing, or unlabelled)."""
+    hit = raw >= 0
+    body = np.where(hit, raw & ((1 << 24) - 1), 0)
+    link = np.where(hit, (raw >> 24), 0)  # link index + 1: 0 is the base
+    bodies = max(int(body.max(initial=0)), max((b for b, _ in labels), default=0)) + 1
+    links = max(int(link.max(initial=0)), max((k + 1 for _, k in labels), default=0)) + 1
+    table = np.full((bodies, links), -1, dtype=np.int32)
+    for (b, k), label in sorted(labels.items(), key=lambda item: item[0][1]):  # whole bodies first
+        if k < 0:
+            table[b, :] = label["id"]
+        else:
+            table[b, k + 1] = label["id"]
+    return np.where(hit, table[body, link], -1).astype(np.int32)

@@ -1,8 +1,11 @@
-"""One simulated home in its own PyBullet DIRECT client: reset, observe, move the base.
+"""One simulated home in its own PyBullet DIRECT client: reset, observe, move the base, open things.
 
 The robot is kinematic: moving it means teleporting its body in short steps and asking, after each
-step, whether it now touches anything but the floor. PyBullet is not thread-safe, so a `World` must
-be created and used from one thread only (the world server's serving thread).
+step, whether it now touches anything but the floor. Storage parts are moved the same way, by
+setting their joints; small objects are static bodies, so an object standing in a drawer is moved
+by the drawer's displacement whenever the drawer's state is set (exact and free of physics
+settling; a fixed constraint would need dynamic objects). PyBullet is not thread-safe, so a `World`
+must be created and used from one thread only (the world server's serving thread).
 """
 
 from __future__ import annotations
@@ -11,13 +14,14 @@ import logging
 import math
 from dataclasses import dataclass
 
+import numpy as np
 import pybullet as p
 
 from worlds.camera import Frame, render
 from worlds.home import HomeSpec, generate_home
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig
 from worlds.scenario import Scenario, make_scenario
-from worlds.scene import build_scene, floor_bodies
+from worlds.scene import BuiltScene, build_scene, floor_bodies
 from worlds.things import Label
 
 log = logging.getLogger(__name__)
@@ -53,7 +57,7 @@ class World:
         self.scenario: Scenario | None = None
         self.base_pose: Pose = (0.0, 0.0, 0.0)
         self.observations = 0
-        self._labels: dict[int, Label] = {}
+        self._built = BuiltScene()
         self._floors: set[int] = set()
         self._robot = -1
 
@@ -61,14 +65,77 @@ class World:
         """Build the home of ``seed`` from scratch and put the robot at the scenario's start pose."""
         home = generate_home(seed, n_rooms)
         scenario = make_scenario(home, seed)
-        p.resetSimulation(physicsClientId=self.client)
-        self._labels = build_scene(home, self.client)
-        self._floors = floor_bodies(self._labels)
-        self._robot = self._add_robot()
-        self.home, self.scenario, self.observations = home, scenario, 0
+        self.build(home)
+        self.scenario = scenario
         self.place(scenario.start_pose)
         log.info("home %d: %d rooms, %.1f m², question %r", seed, len(home.rooms), home.area_m2, scenario.question)
         return scenario
+
+    def build(self, home: HomeSpec) -> None:
+        """Replace the simulation with ``home`` (its storage furniture articulated) and the robot."""
+        p.resetSimulation(physicsClientId=self.client)
+        self._built = build_scene(home, self.client)
+        self._floors = floor_bodies(self._built.labels)
+        self._robot = self._add_robot()
+        self.home, self.scenario, self.observations = home, None, 0
+
+    def set_part_state(self, furniture_id: int, part_name: str, value: float) -> None:
+        """Set a door, drawer or flap of a storage piece; whatever stands in a drawer moves with it."""
+        piece = self._built.storage.get(furniture_id)
+        if piece is None:
+            raise ValueError(f"furniture_id: {furniture_id} is not a storage piece")
+        model = piece.placement.model
+        try:
+            part = model.part(part_name)
+        except KeyError as error:
+            raise ValueError(f"part_name: {error.args[0]}") from None
+        if not (math.isfinite(value) and part.lower <= value <= part.upper):
+            raise ValueError(f"value: {value} is outside [{part.lower}, {part.upper}] for {part_name}")
+        link = piece.links[part_name]
+        before = p.getJointState(piece.body, link, physicsClientId=self.client)[0]
+        p.resetJointState(piece.body, link, value, physicsClientId=self.client)
+        if part.kind != "drawer":
+            return
+        yaw = piece.placement.pose[3]
+        shift = (value - before) * np.array([math.sin(yaw), -math.cos(yaw), 0.0])  # local -y in the world
+        for item_id in self._riders(furniture_id, part_name):
+            body = self._built.items[item_id]
+            position, orientation = p.getBasePositionAndOrientation(body, physicsClientId=self.client)
+            p.resetBasePositionAndOrientation(body, (np.asarray(position) + shift).tolist(), orientation,
+                                              physicsClientId=self.client)
+
+    def _riders(self, furniture_id: int, drawer: str) -> set[int]:
+        """Objects standing in ``drawer``'s slots, and whatever is in, under or on them, transitively."""
+        placement = self._built.storage[furniture_id].placement
+        moving = {slot.name for slot in placement.model.slots if slot.part == drawer}
+        riders = {item for item, slot in placement.contents if slot in moving}
+        assert self.home is not None, "storage exists only in a built home"
+        carried: dict[int, list[int]] = {}
+        for item in self.home.objects:
+            if item.parent is not None:
+                carried.setdefault(item.parent, []).append(item.instance_id)
+        stack = list(riders)
+        while stack:
+            for child in carried.get(stack.pop(), ()):
+                if child not in riders:
+                    riders.add(child)
+                    stack.append(child)
+        return riders
+
+    def object_position(self, instance_id: int) -> tuple[float, float, float]:
+        """Where a small object's centre is now."""
+        position, _ = p.getBasePositionAndOrientation(self._built.items[instance_id], physicsClientId=self.client)
+        return (float(position[0]), float(position[1]), float(position[2]))
+
+    def part_states(self) -> dict[int, dict[str, float]]:
+        """Furniture id -> part name -> joint value, for every storage piece."""
+        return {
+            furniture_id: {
+                part.name: float(p.getJointState(piece.body, piece.links[part.name], physicsClientId=self.client)[0])
+                for part in piece.placement.model.parts
+            }
+            for furniture_id, piece in self._built.storage.items()
+        }
 
     def _add_robot(self) -> int:
         shape = {"radius": ROBOT_RADIUS, "physicsClientId": self.client}
@@ -91,7 +158,7 @@ class World:
         pose = self.base_pose
         p.resetBasePositionAndOrientation(self._robot, _OUT_OF_SIGHT, (0, 0, 0, 1), physicsClientId=self.client)
         try:
-            return render(self.client, self.camera, pose, self._labels)
+            return render(self.client, self.camera, pose, self._built.labels)
         finally:
             self.place(pose)
 
@@ -101,17 +168,20 @@ class World:
         return None if touching is None else touching[0]
 
     def _touching(self) -> tuple[Label, tuple[float, float]] | None:
-        """The deepest contact's label and its (x, y) on the obstacle, ignoring floors."""
+        """The deepest contact's label (a storage part's own) and its (x, y) on the obstacle, ignoring floors."""
         x, y, _ = self.base_pose
         lo, hi = (x - ROBOT_RADIUS, y - ROBOT_RADIUS, 0.0), (x + ROBOT_RADIUS, y + ROBOT_RADIUS, ROBOT_HEIGHT)
-        deepest: tuple[float, int, tuple[float, float]] | None = None
-        for body, _ in p.getOverlappingObjects(lo, hi, physicsClientId=self.client) or ():
+        deepest: tuple[float, tuple[int, int], tuple[float, float]] | None = None
+        for body in {body for body, _ in p.getOverlappingObjects(lo, hi, physicsClientId=self.client) or ()}:
             if body == self._robot or body in self._floors:
                 continue
             for point in p.getClosestPoints(self._robot, body, 0.0, physicsClientId=self.client):
                 if deepest is None or point[8] < deepest[0]:
-                    deepest = (point[8], body, (float(point[6][0]), float(point[6][1])))
-        return None if deepest is None else (self._labels[deepest[1]], deepest[2])
+                    deepest = (point[8], (body, point[4]), (float(point[6][0]), float(point[6][1])))
+        if deepest is None:
+            return None
+        labels = self._built.labels
+        return labels.get(deepest[1], labels[(deepest[1][0], -1)]), deepest[2]
 
     def move_base(self, path: list[tuple[float, float]], yaw: float | None = None) -> MoveResult:
         """Follow the polyline in steps of at most `MAX_STEP`, then turn; stop before any contact."""
