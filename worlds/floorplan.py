@@ -3,7 +3,8 @@
 The plan is a guillotine partition (each cut splits one rectangle in two), so every room edge is
 either on the outline or shared with neighbours, and walls are exactly the outline plus the shared
 edges. Doorways form a random spanning tree over rooms that share enough wall for a door (plus
-sometimes one extra door), so every room is reachable by construction.
+a few extra doors), so every room is reachable by construction. A hallway, when the home has one,
+is a strip across the whole plan that most doors open onto.
 """
 
 from __future__ import annotations
@@ -18,10 +19,14 @@ from worlds.things import Rect
 WALL_THICKNESS = 0.1
 WALL_HEIGHT = 2.5
 MIN_ROOM_SIDE = 2.5
+HALLWAY_WIDTH = (1.3, 1.7)
 DOOR_WIDTH = (0.9, 1.1)
 #: Wall left on each side of a doorway, so the door never sits in a corner.
 DOOR_MARGIN = 0.45
-EXTRA_DOOR_PROBABILITY = 0.5
+#: Doors beyond the spanning tree, per room on average: they make loops through the home.
+EXTRA_DOOR_RATE = 0.15
+#: How much likelier a door onto the hub room (the hallway) is than any other, per candidate.
+HUB_WEIGHT = 6.0
 _EPS = 1e-6
 
 
@@ -54,16 +59,52 @@ class Door:
         return (self.middle, self.edge.at) if self.edge.along == "x" else (self.edge.at, self.middle)
 
 
-def split_floor(rng: np.random.Generator, n_rooms: int) -> tuple[Rect, list[Rect]] | None:
-    """The outline (about 13-18 m² a room, 40-90 m² in all) and its rooms; None if a cut failed."""
-    area = float(np.clip(n_rooms * rng.uniform(13.0, 18.0), 40.0, 90.0))
-    aspect = rng.uniform(1.0, 1.6)
-    width = round(math.sqrt(area * aspect), 1)
-    height = round(area / width, 1)
+def split_floor(
+    rng: np.random.Generator, n_rooms: int, area_m2: float, hallway: bool
+) -> tuple[Rect, list[Rect], int | None] | None:
+    """The outline of about ``area_m2``, its ``n_rooms`` rooms and the hallway's index; None if a cut failed.
+
+    With a hallway, a 1.3-1.7 m strip runs across the whole plan first and the two halves on either
+    side are cut into the other rooms, so most rooms open onto the hallway the way homes are built.
+    """
+    aspect = rng.uniform(1.0, 1.7)
+    width = round(math.sqrt(area_m2 * aspect), 1)
+    height = round(area_m2 / width, 1)
     outline = (0.0, 0.0, width, height)
+    if not hallway:
+        rects = _guillotine(rng, outline, n_rooms)
+        return None if rects is None else (outline, rects, None)
+    across_x = width >= height  # the hallway runs along the longer side
+    depth = height if across_x else width
+    strip = round(rng.uniform(*HALLWAY_WIDTH), 1)
+    room = depth - strip - 2 * MIN_ROOM_SIDE
+    if room < 0:
+        return None
+    lo_depth = MIN_ROOM_SIDE + round(rng.uniform(0.0, room), 1)
+    if across_x:
+        hall = (0.0, lo_depth, width, lo_depth + strip)
+        halves = [(0.0, 0.0, width, lo_depth), (0.0, lo_depth + strip, width, height)]
+    else:
+        hall = (lo_depth, 0.0, lo_depth + strip, height)
+        halves = [(0.0, 0.0, lo_depth, height), (lo_depth + strip, 0.0, width, height)]
+    share = _area(halves[0]) / (_area(halves[0]) + _area(halves[1]))
+    low_count = int(np.clip(round((n_rooms - 1) * share), 1, n_rooms - 2))
+    low = _guillotine(rng, halves[0], low_count)
+    high = _guillotine(rng, halves[1], n_rooms - 1 - low_count)
+    if low is None or high is None:
+        return None
+    return outline, [hall, *low, *high], 0
+
+
+def _area(rect: Rect) -> float:
+    return (rect[2] - rect[0]) * (rect[3] - rect[1])
+
+
+def _guillotine(rng: np.random.Generator, outline: Rect, count: int) -> list[Rect] | None:
+    """``outline`` cut into ``count`` rooms, each cut across the longer side of a piece drawn by area."""
     rects = [outline]
-    while len(rects) < n_rooms:
-        areas = np.array([(r[2] - r[0]) * (r[3] - r[1]) for r in rects])
+    while len(rects) < count:
+        areas = np.array([_area(r) for r in rects])
         x0, y0, x1, y1 = rects.pop(int(rng.choice(len(rects), p=areas / areas.sum())))
         vertical_cut = (x1 - x0) >= (y1 - y0)
         lo, hi = (x0, x1) if vertical_cut else (y0, y1)
@@ -75,7 +116,7 @@ def split_floor(rng: np.random.Generator, n_rooms: int) -> tuple[Rect, list[Rect
             rects += [(x0, y0, cut, y1), (cut, y0, x1, y1)]
         else:
             rects += [(x0, y0, x1, cut), (x0, cut, x1, y1)]
-    return outline, rects
+    return rects
 
 
 def shared_edges(rects: list[Rect]) -> list[SharedEdge]:
@@ -96,21 +137,27 @@ def shared_edges(rects: list[Rect]) -> list[SharedEdge]:
     return edges
 
 
-def pick_doors(rng: np.random.Generator, n_rooms: int, edges: list[SharedEdge]) -> list[Door] | None:
-    """A random spanning tree of doors over rooms, plus maybe one extra; None if rooms can't connect."""
+def pick_doors(
+    rng: np.random.Generator, n_rooms: int, edges: list[SharedEdge], hub: int | None = None
+) -> list[Door] | None:
+    """A random spanning tree of doors over rooms, plus a few extra; None if rooms can't connect.
+
+    Doors onto the ``hub`` room (the hallway) are preferred, so the hallway serves most rooms.
+    """
     capable = [e for e in edges if e.length >= DOOR_WIDTH[1] + 2 * DOOR_MARGIN]
-    visited = {int(rng.integers(n_rooms))}
+    visited = {hub if hub is not None else int(rng.integers(n_rooms))}
     chosen: list[SharedEdge] = []
     while len(visited) < n_rooms:
         options = [e for e in capable if (e.a in visited) != (e.b in visited)]
         if not options:
             return None
-        edge = options[int(rng.integers(len(options)))]
+        weights = np.array([HUB_WEIGHT if hub in (e.a, e.b) else 1.0 for e in options])
+        edge = options[int(rng.choice(len(options), p=weights / weights.sum()))]
         chosen.append(edge)
         visited |= {edge.a, edge.b}
     rest = [e for e in capable if e not in chosen]
-    if rest and rng.random() < EXTRA_DOOR_PROBABILITY:
-        chosen.append(rest[int(rng.integers(len(rest)))])
+    extra = min(len(rest), int(rng.binomial(n_rooms, EXTRA_DOOR_RATE)))
+    chosen += [rest[int(i)] for i in rng.choice(len(rest), size=extra, replace=False)]
     doors = []
     for edge in chosen:
         width = round(rng.uniform(*DOOR_WIDTH), 2)

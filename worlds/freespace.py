@@ -34,6 +34,13 @@ class FreeSpace:
     def cell_centre(self, row: int, col: int) -> tuple[float, float]:
         return (self.origin[0] + (col + 0.5) * self.resolution, self.origin[1] + (row + 0.5) * self.resolution)
 
+    def cell_at(self, x: float, y: float) -> tuple[int, int]:
+        """(row, col) of the cell holding (x, y), clamped to the grid."""
+        rows, cols = self.components.shape
+        col = int(np.clip((x - self.origin[0]) // self.resolution, 0, cols - 1))
+        row = int(np.clip((y - self.origin[1]) // self.resolution, 0, rows - 1))
+        return row, col
+
     def main_component(self) -> int:
         """The component touching the most rooms (ties: the larger one); 0 if nothing is free."""
         best, best_key = 0, (0, 0)

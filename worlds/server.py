@@ -2,7 +2,7 @@
 
 Queryables (all under ``<ns>``, see `agent.bus.keys`):
 
-- ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 3..5} -> scenario, home outline, pose
+- ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 4..10} -> scenario, home outline, pose
 - ``world/cmd/observe``    {} -> pose, camera, labels + arrays rgb (H,W,3 uint8), depth (H,W float32
                            metres, 0 = no return), seg (H,W int32 instance ids, -1 = nothing)
 - ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact

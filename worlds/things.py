@@ -1,22 +1,23 @@
-"""The things a home is made of, as plain frozen data with JSON-able dicts and ground-truth labels.
+"""The things a home is made of, as plain frozen data with ground-truth labels.
 
-Everything is an axis-aligned box (or a primitive inside one) on a flat floor at z = 0, so every
-question about free space reduces to rectangles in the plane: a `Rect` is ``(xmin, ymin, xmax, ymax)``
-in metres. Every rendered thing has a stable ``instance_id`` and a label
-``{"id", "category", "colour", "room"}``: the same label the camera reports for its pixels.
+Everything stands on a flat floor at z = 0 inside an axis-aligned box (storage furniture is turned
+to face its room by quarter turns, so it still fits one), and every question about free space
+reduces to rectangles in the plane: a `Rect` is ``(xmin, ymin, xmax, ymax)`` in metres. Every
+rendered thing has a stable ``instance_id`` and a label ``{"id", "category", "colour", "room"}``:
+the same label the camera reports for its pixels. worlds.spec turns all of it into JSON and back.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
-from typing import Any, TypeVar
+from dataclasses import dataclass, field
+from typing import Any
 
+from worlds.storage import StorageModel
 from worlds.vocabulary import OBJECTS
 
 Rect = tuple[float, float, float, float]
 Label = dict[str, Any]
-T = TypeVar("T")
 
 WALL_COLOUR = "white"
 
@@ -28,9 +29,14 @@ def rect_gap(a: Rect, b: Rect) -> float:
     return math.hypot(dx, dy)
 
 
+#: Overlaps thinner than this are rounding, not overlaps: pieces placed flush side by side touch.
+OVERLAP_TOLERANCE = 1e-9
+
+
 def rects_overlap(a: Rect, b: Rect) -> bool:
     """Whether two rectangles share interior area (touching edges do not count)."""
-    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+    tol = OVERLAP_TOLERANCE
+    return a[0] < b[2] - tol and b[0] < a[2] - tol and a[1] < b[3] - tol and b[1] < a[3] - tol
 
 
 def point_rect_distance(x: float, y: float, rect: Rect) -> float:
@@ -50,26 +56,17 @@ def _label(instance_id: int, category: str, colour: str, room: str) -> Label:
     return {"id": instance_id, "category": category, "colour": colour, "room": room}
 
 
-def to_plain(thing: Any) -> dict[str, Any]:
-    """A dataclass as a JSON-able dict (tuples become lists)."""
-    return {f.name: list(v) if isinstance(v := getattr(thing, f.name), tuple) else v for f in fields(thing)}
-
-
-def from_plain(cls: type[T], data: dict[str, Any]) -> T:
-    """The inverse of `to_plain`: lists become tuples again, so a round trip compares equal."""
-    names = {f.name for f in fields(cls)}  # type: ignore[arg-type]
-    unknown = set(data) - names
-    if unknown:
-        raise ValueError(f"{cls.__name__}: unknown fields {sorted(unknown)}")
-    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items()})
-
-
 @dataclass(frozen=True)
 class Room:
-    """A rectangular room; its floor is a thing of its own (category 'floor') with the room's id."""
+    """A rectangular room of a ``kind`` (a `vocabulary.ROOM_TYPES` word) with a unique ``name``.
+
+    The name is the kind for the first room of a kind and 'second bedroom', 'third bedroom' after
+    that. Its floor is a thing of its own (category 'floor') with the room's id.
+    """
 
     instance_id: int
     name: str
+    kind: str
     rect: Rect
     floor_colour: str
 
@@ -126,7 +123,15 @@ class Wall:
 
 @dataclass(frozen=True)
 class Furniture:
-    """A static furniture box standing on the floor; small objects may rest on its top."""
+    """A furniture piece standing on the floor with its back to a wall.
+
+    ``center`` and ``size`` are the world-aligned box of its body with every part closed (handles
+    and open doors stick out of it). ``facing`` is the direction its front faces, in radians: the
+    inward normal of the wall behind it, a multiple of pi/2. Storage furniture has its
+    ``storage`` model (parts in its local frame, see worlds.storage) and ``joints``, each part's
+    joint state by part name; other furniture has None and {}. ``state`` holds visible switches,
+    e.g. {"power": "on"} or {"curtain": "closed"}.
+    """
 
     instance_id: int
     category: str
@@ -134,6 +139,10 @@ class Furniture:
     room: str
     center: tuple[float, float, float]
     size: tuple[float, float, float]
+    facing: float = 0.0
+    storage: StorageModel | None = None
+    joints: dict[str, float] = field(default_factory=dict, hash=False)
+    state: dict[str, str] = field(default_factory=dict, hash=False)
 
     @property
     def footprint(self) -> Rect:
@@ -147,16 +156,32 @@ class Furniture:
         return _label(self.instance_id, self.category, self.colour, self.room)
 
 
+#: Where a small object is: on a furniture top, inside a storage slot or a container object, under
+#: a cover object, or on the floor.
+RELATIONS = ("on", "inside", "under", "floor")
+
+
 @dataclass(frozen=True)
 class Item:
-    """A small object from the vocabulary, on the floor (``on`` is None) or on a furniture top."""
+    """A small object from the vocabulary, and where it is.
+
+    ``relation`` is one of `RELATIONS`; ``parent`` is the instance id it relates to (a furniture
+    piece for 'on' and for 'inside' a storage ``slot``; an object for 'inside' a container, with
+    ``slot`` None, and for 'under' a cover), None on the floor. ``center`` is in the world with
+    every storage part at its recorded joint state. ``attributes`` holds facts about the object
+    itself (e.g. {"upturned": True} for a bowl put over something); ``state`` its switches.
+    """
 
     instance_id: int
     category: str
     colour: str
     room: str
     center: tuple[float, float, float]
-    on: int | None
+    relation: str = "floor"
+    parent: int | None = None
+    slot: str | None = None
+    attributes: dict[str, Any] = field(default_factory=dict, hash=False)
+    state: dict[str, str] = field(default_factory=dict, hash=False)
 
     @property
     def shape(self) -> str:

@@ -1,0 +1,130 @@
+"""Checking JSON values field by field, collecting every problem with the path of its field.
+
+The scene spec reader (worlds.spec) asks a `FieldChecker` for each field it needs; a value that is
+missing, of the wrong type, non-finite, out of range or not one of the allowed words is recorded
+as ``"furniture[3].size[1]: -0.2 must be positive"`` and comes back as None, so the reader skips
+what it cannot build and goes on to find the next problem. One pass reports every problem.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+from typing import Any
+
+
+class SpecError(ValueError):
+    """A scene spec that cannot be used. ``errors`` holds one 'path: problem' line per problem."""
+
+    def __init__(self, errors: list[str]) -> None:
+        super().__init__("\n".join(errors))
+        self.errors = errors
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+class FieldChecker:
+    """Reads fields and records problems; each method returns the checked value or None."""
+
+    def __init__(self) -> None:
+        self.errors: list[str] = []
+
+    def fail(self, path: str, problem: str) -> None:
+        self.errors.append(f"{path}: {problem}")
+
+    def record(self, value: Any, path: str, required: Collection[str], optional: Collection[str] = ()) -> dict | None:
+        """A JSON object with exactly the ``required`` keys and perhaps some ``optional`` ones."""
+        if not isinstance(value, dict):
+            self.fail(path, f"expected an object, got {type(value).__name__}")
+            return None
+        ok = True
+        for key in value:
+            if key not in required and key not in optional:
+                self.fail(f"{path}.{key}" if path else str(key), "unknown key")
+                ok = False
+        for key in required:
+            if key not in value:
+                self.fail(f"{path}.{key}" if path else key, "missing")
+                ok = False
+        return value if ok else None
+
+    def array(self, value: Any, path: str) -> list | None:
+        if not isinstance(value, list):
+            self.fail(path, f"expected a list, got {type(value).__name__}")
+            return None
+        return value
+
+    def number(self, value: Any, path: str, positive: bool = False) -> float | None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(path, f"expected a number, got {_show(value)}")
+            return None
+        if not math.isfinite(value):
+            self.fail(path, f"{value} is not a finite number")
+            return None
+        if positive and value <= 0:
+            self.fail(path, f"{value} must be positive")
+            return None
+        return float(value)
+
+    def integer(self, value: Any, path: str, least: int) -> int | None:
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(path, f"expected an integer, got {_show(value)}")
+            return None
+        if value < least:
+            self.fail(path, f"{value} must be at least {least}")
+            return None
+        return value
+
+    def word(self, value: Any, path: str, choices: Collection[str] | None = None) -> str | None:
+        if not isinstance(value, str) or not value:
+            self.fail(path, f"expected a non-empty string, got {_show(value)}")
+            return None
+        if choices is not None and value not in choices:
+            listed = ", ".join(sorted(choices)) if len(choices) <= 12 else f"{len(choices)} known words"
+            self.fail(path, f"{value!r} is not one of {listed}")
+            return None
+        return value
+
+    def optional_word(self, value: Any, path: str, choices: Collection[str] | None = None) -> str | None:
+        """A word or null; the caller tells a null apart from a bad value by the value itself."""
+        return None if value is None else self.word(value, path, choices)
+
+    def vector(self, value: Any, path: str, length: int, positive: bool = False) -> tuple[float, ...] | None:
+        items = self.array(value, path)
+        if items is None:
+            return None
+        if len(items) != length:
+            self.fail(path, f"expected {length} numbers, got {len(items)}")
+            return None
+        numbers = [self.number(v, f"{path}[{i}]", positive) for i, v in enumerate(items)]
+        return None if any(n is None for n in numbers) else tuple(numbers)  # type: ignore[arg-type]
+
+    def words(self, value: Any, path: str, allowed: dict[str, Collection[str]] | None = None) -> dict[str, str] | None:
+        """A JSON object of string values; with ``allowed``, only those keys and values."""
+        if not isinstance(value, dict):
+            self.fail(path, f"expected an object, got {type(value).__name__}")
+            return None
+        ok = True
+        for key, item in value.items():
+            if allowed is not None and key not in allowed:
+                self.fail(f"{path}.{key}", "unknown key")
+                ok = False
+            elif self.word(item, f"{path}.{key}", None if allowed is None else allowed[key]) is None:
+                ok = False
+        return dict(value) if ok else None
+
+    def scalars(self, value: Any, path: str) -> dict[str, Any] | None:
+        """A JSON object of strings, finite numbers and booleans (free-form attributes)."""
+        if not isinstance(value, dict):
+            self.fail(path, f"expected an object, got {type(value).__name__}")
+            return None
+        ok = True
+        for key, item in value.items():
+            if isinstance(item, bool) or isinstance(item, str):
+                continue
+            if self.number(item, f"{path}.{key}") is None:
+                ok = False
+        return dict(value) if ok else None
