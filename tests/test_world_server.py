@@ -26,6 +26,7 @@ from worlds.home import generate_home
 from worlds.robot import ROBOT_RADIUS, CameraConfig, camera_pose
 from worlds.scenario import make_scenario
 from worlds.server import WorldServer
+from worlds.spec import dump_spec
 from worlds.things import point_rect_distance
 
 World = tuple[zenoh.Session, Keys]
@@ -253,3 +254,28 @@ def test_camera_options_are_validated_by_the_command_line() -> None:
         [sys.executable, "-m", "worlds.server", "--hfov", "200"], capture_output=True, text=True, timeout=60
     )
     assert result.returncode == 2 and "camera.hfov_deg" in result.stderr
+
+
+def test_reset_builds_a_given_scene_and_scenario(world: World) -> None:
+    home = generate_home(11)
+    scenario = make_scenario(home, 11, hidden=True)
+    reply = _cmd(world, "reset", {"seed": 0, "scene": dump_spec(home), "scenario": scenario.to_dict()}).meta
+    assert reply["scenario"] == scenario.to_dict()
+    assert reply["home"]["area_m2"] == pytest.approx(home.area_m2)
+    assert reply["base_pose"][:2] == pytest.approx(list(scenario.start_pose[:2]), abs=1e-6)
+
+
+def test_reset_rejects_a_bad_scene_or_scenario_naming_the_field(world: World) -> None:
+    home = generate_home(11)
+    spec = dump_spec(home)
+    spec["objects"][0]["parent"] = 99999
+    with pytest.raises(QueryFailed, match=r"reset\.scene\.objects\[0\]\.parent"):
+        _cmd(world, "reset", {"seed": 0, "scene": spec})
+    scenario = make_scenario(home, 11).to_dict()
+    scenario["answer"] = "E"
+    with pytest.raises(QueryFailed, match=r"reset\.scenario\.answer"):
+        _cmd(world, "reset", {"seed": 0, "scenario": scenario})
+    del scenario["budget"]
+    with pytest.raises(QueryFailed, match=r"reset\.scenario\.budget: missing"):
+        _cmd(world, "reset", {"seed": 0, "scenario": scenario})
+    assert _cmd(world, "reset", {"seed": 11}).meta["scenario"]["seed"] == 11

@@ -127,8 +127,13 @@ def test_a_hidden_object_shows_once_its_drawer_is_open(sim: World) -> None:
     assert not (hidden.seg == item_id).any()
     truth = {**sim.home.labels(), **home_part_labels(sim.home)}  # the drawer and its handle have ids of their own
     for frame in (seen, hidden):
-        assert all(label == truth[label["id"]] for label in frame.labels)
+        assert all({k: label[k] for k in truth[label["id"]]} == truth[label["id"]] for label in frame.labels)
     assert {"drawer", "handle"} <= {label["category"] for label in seen.labels}
+    # What the camera shows now: the piece open, then closed, and the object seen inside it.
+    states = [next(l.get("state") for l in frame.labels if l["id"] == piece_id) for frame in (seen, hidden)
+              if any(l["id"] == piece_id for l in frame.labels)]
+    assert states[0] == "open" and (len(states) == 1 or states[1] == "closed")
+    assert next(l for l in seen.labels if l["id"] == item_id)["inside"] == piece.category
 
 
 def test_set_part_state_rejects_what_is_not_there(sim: World) -> None:

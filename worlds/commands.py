@@ -8,10 +8,15 @@ fields are rejected too, so a misspelt option fails loudly instead of being igno
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, fields
 from typing import Any
 
 from agent.bus.rpc import RequestError
-from worlds.home import ROOM_COUNT
+from worlds.home import ROOM_COUNT, HomeSpec
+from worlds.scenario import Scenario
+from worlds.spec import load_spec
+from worlds.spec_fields import SpecError
+from worlds.vocabulary import LETTERS
 
 MAX_WAYPOINTS = 500
 #: Waypoints further than this from the origin are certainly a mistake (homes are ~10 m across).
@@ -34,9 +39,19 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def parse_reset(meta: dict[str, Any]) -> tuple[int, int | None]:
-    """(seed, n_rooms) from ``{"seed": int >= 0, "n_rooms": optional int}``."""
-    _only(meta, "reset", ("seed", "n_rooms"))
+@dataclass(frozen=True)
+class ResetRequest:
+    """What to build: the home of ``seed`` or the given ``scene``, and its scenario or the given one."""
+
+    seed: int
+    n_rooms: int | None
+    home: HomeSpec | None
+    scenario: Scenario | None
+
+
+def parse_reset(meta: dict[str, Any]) -> ResetRequest:
+    """From ``{"seed": int >= 0, "n_rooms": optional int, "scene": optional spec, "scenario": optional}``."""
+    _only(meta, "reset", ("seed", "n_rooms", "scene", "scenario"))
     if "seed" not in meta:
         raise RequestError("reset.seed: missing (an integer >= 0 is required)")
     seed = meta["seed"]
@@ -50,7 +65,42 @@ def parse_reset(meta: dict[str, Any]) -> tuple[int, int | None]:
             raise RequestError(f"reset.n_rooms: expected an integer or null, got {type(n_rooms).__name__}")
         if not ROOM_COUNT[0] <= n_rooms <= ROOM_COUNT[1]:
             raise RequestError(f"reset.n_rooms: {n_rooms} must lie in {ROOM_COUNT[0]}..{ROOM_COUNT[1]}")
-    return seed, n_rooms
+    home = None
+    if meta.get("scene") is not None:
+        try:
+            home = load_spec(meta["scene"])
+        except SpecError as error:
+            raise RequestError("; ".join(f"reset.scene.{line}" for line in error.errors)) from None
+    scenario = _parse_scenario(meta["scenario"]) if meta.get("scenario") is not None else None
+    return ResetRequest(seed, n_rooms, home, scenario)
+
+
+def _parse_scenario(data: Any) -> Scenario:
+    """A scenario sent by the client, checked field by field."""
+    where = "reset.scenario"
+    if not isinstance(data, dict):
+        raise RequestError(f"{where}: expected an object")
+    expected = {f.name for f in fields(Scenario)}
+    mismatched = sorted(expected ^ set(data))
+    if mismatched:
+        name = mismatched[0]
+        raise RequestError(f"{where}.{name}: {'missing' if name in expected else 'unknown field'}")
+    for name in ("question", "answer_text", "kind", "asks"):
+        if not isinstance(data[name], str):
+            raise RequestError(f"{where}.{name}: expected a string")
+    if not (isinstance(data["choices"], list) and len(data["choices"]) == 4
+            and all(isinstance(c, str) for c in data["choices"])):
+        raise RequestError(f"{where}.choices: expected four strings")
+    if data["answer"] not in LETTERS or data["choices"][LETTERS.index(data["answer"])] != data["answer_text"]:
+        raise RequestError(f"{where}.answer: must be a letter A-D naming the choice equal to answer_text")
+    if not _is_int(data["seed"]) or not _is_int(data["budget"]) or data["budget"] <= 0:
+        raise RequestError(f"{where}.budget: expected a positive integer (and seed an integer)")
+    pose = data["start_pose"]
+    if not (isinstance(pose, list) and len(pose) == 3 and all(_is_number(v) for v in pose)):
+        raise RequestError(f"{where}.start_pose: expected [x, y, yaw] of finite numbers")
+    if not isinstance(data["target"], dict):
+        raise RequestError(f"{where}.target: expected an object")
+    return Scenario.from_dict(data)
 
 
 def parse_observe(meta: dict[str, Any]) -> None:

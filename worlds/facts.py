@@ -34,12 +34,15 @@ class HomeFacts:
             current = self.items.get(parent)
         return None
 
-    def is_open(self, furniture: Furniture, part_name: str | None = None) -> bool:
-        """Whether the part (any part when None) of a storage piece is opened past `CLOSED_SHARE`."""
+    def is_open(self, furniture: Furniture, part_name: str | None = None,
+                joints: dict[str, float] | None = None) -> bool:
+        """Whether the part (any part when None) of a storage piece is opened past `CLOSED_SHARE`,
+        at the home's recorded joint states or at ``joints`` when given."""
         if furniture.storage is None:
             return False
+        joints = furniture.joints if joints is None else joints
         parts = [furniture.storage.part(part_name)] if part_name else list(furniture.storage.parts)
-        return any(furniture.joints.get(p.name, 0.0) > p.lower + CLOSED_SHARE * (p.upper - p.lower) for p in parts)
+        return any(joints.get(p.name, 0.0) > p.lower + CLOSED_SHARE * (p.upper - p.lower) for p in parts)
 
     def is_hidden(self, item: Item) -> bool:
         """Whether the object cannot be seen without opening or lifting something."""

@@ -29,7 +29,9 @@ from agent.bus.keys import Keys
 from agent.bus.rpc import Arrays, CommandServer, RequestError
 from agent.bus.session import EndpointError, open_session
 from worlds import commands
+from worlds.home import generate_home
 from worlds.robot import CameraConfig, description
+from worlds.scenario import make_scenario
 from worlds.sim import World
 
 log = logging.getLogger(__name__)
@@ -80,9 +82,10 @@ class WorldServer:
         return self._world
 
     def _reset(self, request: Message) -> tuple[dict[str, Any], Arrays]:
-        seed, n_rooms = commands.parse_reset(request.meta)
+        wanted = commands.parse_reset(request.meta)
         assert self._world is not None
-        scenario = self._world.reset(seed, n_rooms)
+        home = wanted.home or generate_home(wanted.seed, wanted.n_rooms)
+        scenario = self._world.start(home, wanted.scenario or make_scenario(home, wanted.seed))
         home = self._world.home
         assert home is not None
         return {

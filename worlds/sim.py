@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pybullet as p
 
 from worlds.camera import Frame, render
+from worlds.facts import HomeFacts
 from worlds.home import HomeSpec, generate_home
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig
 from worlds.scenario import Scenario, make_scenario
@@ -62,13 +63,16 @@ class World:
         self._robot = -1
 
     def reset(self, seed: int, n_rooms: int | None = None) -> Scenario:
-        """Build the home of ``seed`` from scratch and put the robot at the scenario's start pose."""
+        """Build the home of ``seed`` from scratch and put the robot at its scenario's start pose."""
         home = generate_home(seed, n_rooms)
-        scenario = make_scenario(home, seed)
+        return self.start(home, make_scenario(home, seed))
+
+    def start(self, home: HomeSpec, scenario: Scenario) -> Scenario:
+        """Build ``home`` and put the robot at ``scenario``'s start pose."""
         self.build(home)
         self.scenario = scenario
         self.place(scenario.start_pose)
-        log.info("home %d: %d rooms, %.1f m², question %r", seed, len(home.rooms), home.area_m2, scenario.question)
+        log.info("home %d: %d rooms, %.1f m², question %r", home.seed, len(home.rooms), home.area_m2, scenario.question)
         return scenario
 
     def build(self, home: HomeSpec) -> None:
@@ -77,6 +81,7 @@ class World:
         self._built = build_scene(home, self.client)
         self._floors = floor_bodies(self._built.labels)
         self._robot = self._add_robot()
+        self._facts = HomeFacts(home)
         self.home, self.scenario, self.observations = home, None, 0
 
     def set_part_state(self, furniture_id: int, part_name: str, value: float) -> None:
@@ -158,9 +163,27 @@ class World:
         pose = self.base_pose
         p.resetBasePositionAndOrientation(self._robot, _OUT_OF_SIGHT, (0, 0, 0, 1), physicsClientId=self.client)
         try:
-            return render(self.client, self.camera, pose, self._built.labels)
+            frame = render(self.client, self.camera, pose, self._built.labels)
         finally:
             self.place(pose)
+        joints = self.part_states()
+        return replace(frame, labels=[self._visible_facts(label, joints) for label in frame.labels])
+
+    def _visible_facts(self, label: Label, joints: dict[int, dict[str, float]]) -> Label:
+        """The label with what the camera shows of the thing now: a switch or door ``state``, and
+        the kind of storage it is seen ``inside``. Doors may have moved since the home was built."""
+        facts, thing_id = self._facts, label["id"]
+        extra: dict[str, str] = {}
+        furniture = facts.furniture.get(thing_id)
+        item = facts.items.get(thing_id)
+        switches = (furniture or item).state if (furniture or item) is not None else {}
+        if switches:
+            extra["state"] = next(iter(switches.values()))
+        if furniture is not None and furniture.storage is not None:
+            extra["state"] = "open" if facts.is_open(furniture, joints=joints[thing_id]) else "closed"
+        if item is not None and (storage := facts.storage_of(item)) is not None:
+            extra["inside"] = storage.category
+        return {**label, **extra}
 
     def contact(self) -> Label | None:
         """The label of what the robot body touches now (the deepest contact), ignoring floors."""
