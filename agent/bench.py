@@ -40,5 +40,15 @@ def format_step_table(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def format_world_table(report: dict[str, Any]) -> str:
+    lines = [f"bench world: camera {report['camera']}, median of {report['repeats']} homes per area"]
+    rows = report["areas"]
+    keys = list(next(iter(rows.values())))
+    lines.append(f"{'area m²':>8} " + " ".join(f"{key:>14}" for key in keys))
+    for area, figures in rows.items():
+        lines.append(f"{area:>8} " + " ".join(f"{figures[key]:>14.3f}" for key in keys))
+    return "\n".join(lines)
+
+
 def dump(report: dict[str, Any]) -> str:
     return json.dumps(report, indent=2)

@@ -20,6 +20,10 @@ def main(argv: list[str] | None = None) -> int:
         from worlds.server import main as world_main
 
         return world_main(argv[1:])
+    if argv[:1] == ["scene"]:
+        from worlds.scene_tools import main as scene_main
+
+        return scene_main(argv[1:])
     parser = _parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
@@ -36,6 +40,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     commands = parser.add_subparsers(dest="command", required=True)
     commands.add_parser("world", help="serve a simulated home over Zenoh (see `homebot world --help`)")
+    commands.add_parser("scene", help="make, draw and check scene specs (see `homebot scene --help`)")
 
     run = commands.add_parser("run", help="run one EQA episode against a simulated home")
     _config_options(run)
@@ -62,7 +67,14 @@ def _parser() -> argparse.ArgumentParser:
     make.add_argument("--names", default="calib,test", help="part names, comma separated (default calib,test)")
     make.add_argument("--seed-base", type=int, default=0, help="first seed; parts take consecutive seeds")
     make.add_argument("--out", type=Path, default=Path("suites"), help="output folder (default ./suites)")
+    make.add_argument("--hidden", choices=("any", "only", "never"), default="any",
+                      help="hidden-evidence questions: mixed in (default), only those, or none")
+    make.add_argument("--kinds", default=None,
+                      help="question categories, comma separated (default: all five in the paper's shares)")
     make.set_defaults(handler=_suite_make)
+    tabletop = suites.add_parser("tabletop", help="write the five tabletop suites of interactive exploration")
+    tabletop.add_argument("--out", type=Path, default=Path("suites/tabletop"), help="output folder")
+    tabletop.set_defaults(handler=_suite_tabletop)
 
     bench = commands.add_parser("bench", help="measure speed")
     benches = bench.add_subparsers(dest="bench", required=True)
@@ -71,6 +83,11 @@ def _parser() -> argparse.ArgumentParser:
     step.add_argument("--seed", type=int, default=0)
     step.add_argument("--json", action="store_true", help="print the figures as JSON")
     step.set_defaults(handler=_bench_step)
+    world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
+    world.add_argument("--areas", default="60,150,300", help="floor areas in m², comma separated")
+    world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
+    world.add_argument("--json", action="store_true", help="print the figures as JSON")
+    world.set_defaults(handler=_bench_world)
     return parser
 
 
@@ -142,9 +159,37 @@ def _suite_make(args: argparse.Namespace) -> int:
         end = "\n" if done == total else ""
         print(f"\r  {part}: {done}/{total} scenarios", end=end, file=sys.stderr, flush=True)
 
-    paths = write_suite(args.out, parts, progress)
+    kinds = tuple(k.strip() for k in args.kinds.split(",")) if args.kinds else None
+    hidden = {"any": None, "only": True, "never": False}[args.hidden]
+    try:
+        paths = write_suite(args.out, parts, progress, kinds=kinds, hidden=hidden)
+    except SuiteError as error:
+        print(f"\nhomebot suite make: {error}", file=sys.stderr)
+        return 2
     for part in parts:
         print(f"{paths[part.name]}: seeds {part.seeds.start}..{part.seeds.stop - 1}")
+    return 0
+
+
+def _suite_tabletop(args: argparse.Namespace) -> int:
+    from worlds.tabletop import write_tabletop_suites
+
+    for path in write_tabletop_suites(args.out):
+        print(path)
+    return 0
+
+
+def _bench_world(args: argparse.Namespace) -> int:
+    from agent.bench import dump, format_world_table
+    from worlds.scene_tools import bench_world
+
+    try:
+        areas = tuple(float(a) for a in args.areas.split(","))
+    except ValueError:
+        print(f"homebot bench world: --areas {args.areas!r}: expected numbers like 60,150,300", file=sys.stderr)
+        return 2
+    report = bench_world(areas, args.repeats)
+    print(dump(report) if args.json else format_world_table(report))
     return 0
 
 

@@ -57,10 +57,14 @@ def spec_checksum(spec: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(spec, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
-def suite_line(seed: int, part: str, index: int) -> dict[str, Any]:
+def suite_line(seed: int, part: str, index: int, kinds: tuple[str, ...] | None = None,
+               hidden: bool | None = None) -> dict[str, Any]:
     """The suite entry for ``seed``: the scenario and the checksum of its home."""
     home = generate_home(seed)
-    scenario = make_scenario(home, seed)
+    try:
+        scenario = make_scenario(home, seed, kinds, hidden)
+    except (ValueError, RuntimeError) as error:
+        raise SuiteError(f"seed {seed}: {error}") from None
     return {
         "format": SUITE_FORMAT,
         "version": SUITE_VERSION,
@@ -74,7 +78,8 @@ def suite_line(seed: int, part: str, index: int) -> dict[str, Any]:
 
 
 def write_suite(out_dir: Path, parts: list[SuitePart],
-                progress: Callable[[str, int, int], None] | None = None) -> dict[str, Path]:
+                progress: Callable[[str, int, int], None] | None = None,
+                kinds: tuple[str, ...] | None = None, hidden: bool | None = None) -> dict[str, Path]:
     """Write each part to ``<out_dir>/<name>.jsonl``, appending and resuming; return the paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
@@ -84,7 +89,7 @@ def write_suite(out_dir: Path, parts: list[SuitePart],
         with open(path, "a", encoding="utf-8") as out:
             for index, seed in enumerate(part.seeds):
                 if seed not in done:
-                    out.write(json.dumps(suite_line(seed, part.name, index), ensure_ascii=False) + "\n")
+                    out.write(json.dumps(suite_line(seed, part.name, index, kinds, hidden), ensure_ascii=False) + "\n")
                     out.flush()
                 if progress:
                     progress(part.name, index + 1, len(part.seeds))

@@ -7,6 +7,8 @@ affinities in [0, 1]; a pair not listed gets `UNLISTED`.
 
 from __future__ import annotations
 
+from worlds.vocabulary import room_kind
+
 UNLISTED = 0.15
 
 #: category -> {room type: affinity}
@@ -48,16 +50,8 @@ ROOM_AFFINITY: dict[str, dict[str, float]] = {
 DOORWAY_VALUE = 0.35
 
 
-def room_type(room_name: str) -> str:
-    """The type of a room from its name ("second bedroom" -> "bedroom")."""
-    for prefix in ("second ", "third ", "fourth ", "small ", "large ", "main "):
-        if room_name.startswith(prefix):
-            return room_name[len(prefix):]
-    return room_name
-
-
 def affinity(category: str | None, room_name: str) -> float:
     """How likely a thing of ``category`` is to be found in a room of this name's type."""
     if category is None:
         return UNLISTED
-    return ROOM_AFFINITY.get(category, {}).get(room_type(room_name), UNLISTED)
+    return ROOM_AFFINITY.get(category, {}).get(room_kind(room_name), UNLISTED)
