@@ -1,13 +1,10 @@
-"""The words homes are made of, and the question templates built from them.
+"""The words homes are made of.
 
 The generator draws every category, colour and room type from here, and the VLM simulator parses
-questions with the same vocabulary, the way a real VLM would understand any of these words.
+questions (`worlds.questions`) with the same words, the way a real VLM would understand them.
 """
 
 from __future__ import annotations
-
-import re
-from dataclasses import dataclass
 
 #: Colour name -> RGBA used to render it.
 COLOURS: dict[str, tuple[float, float, float, float]] = {
@@ -196,47 +193,3 @@ ESSENTIALS: dict[str, tuple[str, ...]] = {
 
 PAD_CHOICE = "(Do not choose this option)"
 LETTERS = ("A", "B", "C", "D")
-
-
-@dataclass(frozen=True)
-class Template:
-    """A question form: what it asks for, and the attributes that pick its target."""
-
-    kind: str  # the paper's category: identification, existence, state, location, counting
-    asks: str  # the attribute the answer names: colour, room, category or yes/no
-    text: str  # a str.format pattern over category, colour and room
-
-    def pattern(self) -> re.Pattern[str]:
-        regex = re.escape(self.text)
-        for slot, words in (("category", OBJECTS), ("colour", COLOURS), ("room", ROOM_TYPES)):
-            alternatives = "|".join(re.escape(w) for w in sorted(words, key=len, reverse=True))
-            regex = regex.replace(re.escape("{" + slot + "}"), f"(?P<{slot}>{alternatives})")
-        return re.compile(f"^{regex}$", re.IGNORECASE)
-
-
-TEMPLATES: tuple[Template, ...] = (
-    Template("identification", "category", "Which object in the {room} is {colour}?"),
-    Template("identification", "colour", "What colour is the {category} in the {room}?"),
-    Template("existence", "yes/no", "Is there a {colour} {category} in the {room}?"),
-    Template("location", "room", "Which room is the {colour} {category} in?"),
-)
-
-
-@dataclass(frozen=True)
-class ParsedQuestion:
-    """What a question asks (``asks``) about which target (attributes named in it)."""
-
-    template: Template
-    category: str | None
-    colour: str | None
-    room: str | None
-
-
-def parse_question(text: str) -> ParsedQuestion | None:
-    """Read a question with the vocabulary; None when it matches no template."""
-    for template in TEMPLATES:
-        match = template.pattern().match(text.strip())
-        if match:
-            slots = {k: v.lower() for k, v in match.groupdict().items()}
-            return ParsedQuestion(template, slots.get("category"), slots.get("colour"), slots.get("room"))
-    return None
