@@ -56,9 +56,10 @@ class Config:
     vlm: SimParams = field(default_factory=SimParams)
 
 
-def load_config(path: Path | None = None, overrides: list[str] | None = None) -> Config:
-    """Defaults, then the TOML file at ``path``, then ``key=value`` overrides (values in JSON or bare)."""
-    config = Config()
+def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:
+    """``base`` (default: the defaults), then the TOML file at ``path``, then ``key=value`` overrides
+    (values in JSON or bare)."""
+    config = base or Config()
     if path is not None:
         try:
             data = tomllib.loads(Path(path).read_text())

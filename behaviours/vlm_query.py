@@ -1,0 +1,77 @@
+"""A behaviour that asks the VLM in a worker thread and stays RUNNING until the answer is in.
+
+A remote model takes hundreds of milliseconds; the tick must not wait for it. `initialise` hands
+the question to a one-thread executor, `update` polls the future, fails with the reason on a
+timeout or an error, and passes the answer to `use` when it arrives.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+
+from agent.runtime.timing import StageTimer
+from agent.vlm.protocol import VisionLanguageModel
+
+
+class VLMQuery(py_trees.behaviour.Behaviour):
+    """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`."""
+
+    stage = "vlm"
+
+    def __init__(self, name: str, vlm: VisionLanguageModel, timeout_s: float, timer: StageTimer | None) -> None:
+        super().__init__(name)
+        self.vlm = vlm
+        self.timeout_s = timeout_s
+        self.timer = timer
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vlm")
+        self._future: Future | None = None
+        self._started = 0.0
+
+    def inputs(self) -> tuple[Any, ...]:
+        """Read what the question needs from the blackboard (in the tick thread)."""
+        return ()
+
+    def ask(self, *inputs: Any) -> Any:
+        """Ask the VLM (in the worker thread); the result goes to `use`."""
+        raise NotImplementedError
+
+    def use(self, answer: Any) -> Status:
+        """Record the answer (in the tick thread) and say how it went."""
+        raise NotImplementedError
+
+    def initialise(self) -> None:
+        self._started = time.perf_counter()
+        self._future = self._executor.submit(self.ask, *self.inputs())
+
+    def update(self) -> Status:
+        elapsed = time.perf_counter() - self._started
+        if self._future is None:
+            return Status.FAILURE
+        if not self._future.done():
+            if elapsed > self.timeout_s:
+                self._future.cancel()
+                self.feedback_message = f"the {self.vlm.name} VLM gave no answer within {self.timeout_s:.1f} s"
+                return Status.FAILURE
+            self.feedback_message = f"asking the {self.vlm.name} VLM ({elapsed:.1f} s)"
+            return Status.RUNNING
+        try:
+            answer = self._future.result()
+        except Exception as error:  # any backend failure ends the step with its reason
+            self.feedback_message = f"the {self.vlm.name} VLM failed: {type(error).__name__}: {error}"
+            return Status.FAILURE
+        if self.timer is not None:
+            self.timer.record(self.stage, elapsed * 1000.0)
+        return self.use(answer)
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID and self._future is not None:
+            self._future.cancel()
+        self._future = None
+
+    def shutdown(self) -> None:
+        self._executor.shutdown(wait=False, cancel_futures=True)
