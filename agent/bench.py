@@ -10,26 +10,31 @@ from typing import Any
 from agent.config import Config
 from agent.runtime.run import RunRequest, run_episode
 from agent.runtime.timing import StageTimer
+from worlds.home import generate_home
+from worlds.spec import dump_spec
 
 STAGES = ("render", "transport", "tsdf", "planning", "vlm", "tick")
 
 
-def bench_step(config: Config, seed: int, out_root: Path | None) -> dict[str, Any]:
-    """Run one fixed episode with per-stage timing; return the summary and the episode's result."""
+def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[str, Any]:
+    """Run one fixed episode (the seed's home, or one of ``area_m2``) with per-stage timing."""
     timer = StageTimer()
+    home = generate_home(seed, area_m2=area_m2)
     with tempfile.TemporaryDirectory(prefix="homebot-bench-") as scratch:
-        root = out_root or Path(scratch)
-        result = run_episode(RunRequest(seed=seed, config=config, out_root=root), timer=timer)
+        request = RunRequest(seed=seed, config=config, out_root=Path(scratch), scene=dump_spec(home), save_map=False)
+        result = run_episode(request, timer=timer)
     summary = timer.summary()
     steps = max(1, result.get("steps", 0))
-    return {"seed": seed, "steps": result.get("steps", 0), "status": result["status"],
+    return {"seed": seed, "area_m2": round(home.area_m2, 1), "rooms": len(home.rooms),
+            "steps": result.get("steps", 0), "status": result["status"],
             "episode_s": result["seconds"], "per_step_ms": 1000.0 * result["seconds"] / steps,
             "stages": {stage: summary[stage] for stage in STAGES if stage in summary}}
 
 
 def format_step_table(report: dict[str, Any]) -> str:
     lines = [
-        f"bench step: seed {report['seed']}, {report['steps']} steps, episode {report['episode_s']:.2f} s "
+        f"bench step: seed {report['seed']}, {report['area_m2']} m², {report['rooms']} rooms, "
+        f"{report['steps']} steps, episode {report['episode_s']:.2f} s "
         f"({report['per_step_ms']:.0f} ms per step), {report['status']}",
         f"{'stage':<10} {'count':>6} {'median ms':>10} {'p95 ms':>9} {'max ms':>9}",
     ]

@@ -44,6 +44,7 @@ class RunRequest:
     namespace: str | None = None
     run_id: str | None = None
     scenario: dict[str, Any] | None = None  # a suite's scenario; None lets the world draw one from the seed
+    scene: dict[str, Any] | None = None  # a scene spec; None lets the world generate the seed's home
     save_map: bool = True  # the map picture costs ~0.3 s; evaluations of many episodes skip it
 
 
@@ -79,6 +80,8 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         reset_request: dict[str, Any] = {"seed": request.seed}
         if request.scenario is not None:
             reset_request["scenario"] = request.scenario
+        if request.scene is not None:
+            reset_request["scene"] = request.scene
         reset = link.call("reset", reset_request, timeout_s=config.bus.world_start_timeout_s)
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
