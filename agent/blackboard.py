@@ -10,3 +10,4 @@ PLAN = "plan"  # agent.planning.explore.MovePlan, the next move
 TRAJECTORY = "trajectory"  # list[tuple[float, float, float]], every base pose reached
 EXPLORATION_COMPLETE = "exploration_complete"  # bool, no reachable frontier is left
 ANSWER = "answer"  # dict, written once when the episode answers
+SEMANTIC_MAP = "semantic_map"  # agent.mapping.semantic_map.SemanticMap, semantic methods only

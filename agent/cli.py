@@ -76,11 +76,25 @@ def _parser() -> argparse.ArgumentParser:
     tabletop.add_argument("--out", type=Path, default=Path("suites/tabletop"), help="output folder")
     tabletop.set_defaults(handler=_suite_tabletop)
 
+    evaluate = commands.add_parser("eval", help="evaluate over a suite")
+    evaluations = evaluate.add_subparsers(dest="eval", required=True)
+    explore = evaluations.add_parser("explore", help="exploration methods: success rate against normalised time")
+    _config_options(explore)
+    explore.add_argument("--suite", type=Path, required=True, help="a suite file (homebot suite make)")
+    explore.add_argument("--methods", default="fbe,semantic,semantic-no-lsv,semantic-no-gsv",
+                         help="comma separated (default: all four)")
+    explore.add_argument("--workers", type=int, default=2, help="parallel episodes, each with its own world")
+    explore.add_argument("--limit", type=int, default=None, help="only the first N scenarios")
+    explore.add_argument("--out", type=Path, default=Path("runs/eval-explore"),
+                         help="results, curves.csv and curves.png go here; reruns resume")
+    explore.set_defaults(handler=_eval_explore)
+
     bench = commands.add_parser("bench", help="measure speed")
     benches = bench.add_subparsers(dest="bench", required=True)
     step = benches.add_parser("step", help="per-stage time of each step over one fixed episode")
     _config_options(step)
     step.add_argument("--seed", type=int, default=0)
+    step.add_argument("--area", type=float, default=None, help="floor area of the home in m² (60..300)")
     step.add_argument("--json", action="store_true", help="print the figures as JSON")
     step.set_defaults(handler=_bench_step)
     world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
@@ -94,7 +108,7 @@ def _parser() -> argparse.ArgumentParser:
 def _config_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", type=Path, help="a TOML file of settings")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override one setting, e.g. --set vlm.skill=0.6 (repeatable)")
+                        help="override one setting, e.g. --set vlm.sim.skill=0.6 (repeatable)")
     parser.add_argument("--listen", action="append", metavar="ENDPOINT",
                         help=f"where `homebot watch` can reach this agent (default {DEFAULT_AGENT_ENDPOINT})")
 
@@ -171,6 +185,29 @@ def _suite_make(args: argparse.Namespace) -> int:
     return 0
 
 
+def _eval_explore(args: argparse.Namespace) -> int:
+    from agent.eval.explore import evaluate_explore
+    from worlds.suite import SuiteError
+
+    config = load_config(args.config, [*args.set, "bus.listen=[]"])  # workers need no watcher endpoint
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    if args.workers < 1:
+        print("homebot eval explore: --workers must be at least 1", file=sys.stderr)
+        return 2
+    try:
+        report = evaluate_explore(args.suite, methods, args.out, args.workers, config, args.limit)
+    except (ValueError, SuiteError, OSError) as error:
+        print(f"homebot eval explore: {error}", file=sys.stderr)
+        return 2
+    taus = report["taus"]
+    marks = [i for i, tau in enumerate(taus) if round(tau, 2) in (0.25, 0.5, 0.75, 1.0)]
+    print(f"{'method':<18} {'n':>4} " + " ".join(f"{'τ=' + format(taus[i], '.2f'):>7}" for i in marks))
+    for method, curve in report["curves"].items():
+        print(f"{method:<18} {report['counts'][method]:>4} " + " ".join(f"{100 * curve[i]:>6.1f}%" for i in marks))
+    print(f"{report['failed']} failed episodes; results {report['results']}; curves in {args.out}/curves.png and .csv")
+    return 0
+
+
 def _suite_tabletop(args: argparse.Namespace) -> int:
     from worlds.tabletop import write_tabletop_suites
 
@@ -196,7 +233,7 @@ def _bench_world(args: argparse.Namespace) -> int:
 def _bench_step(args: argparse.Namespace) -> int:
     from agent.bench import bench_step, dump, format_step_table
 
-    report = bench_step(_load(args), args.seed, None)
+    report = bench_step(_load(args), args.seed, args.area)
     print(dump(report) if args.json else format_step_table(report))
     return 0
 

@@ -15,8 +15,11 @@ from pathlib import Path
 from typing import Any
 
 from agent.mapping.occupancy import OccupancyConfig
+from agent.mapping.semantic_map import SemanticValueConfig
 from agent.planning.explore import ExploreConfig
-from agent.vlm.sim import SimParams
+from agent.planning.prompt_points import PromptPointConfig
+from agent.planning.semantic import FrontierWeightConfig
+from agent.vlm.settings import VLMSettings
 
 
 class ConfigError(ValueError):
@@ -53,7 +56,10 @@ class Config:
     episode: EpisodeSettings = field(default_factory=EpisodeSettings)
     map: OccupancyConfig = field(default_factory=OccupancyConfig)
     explore: ExploreConfig = field(default_factory=ExploreConfig)
-    vlm: SimParams = field(default_factory=SimParams)
+    prompt_points: PromptPointConfig = field(default_factory=PromptPointConfig)
+    semantic_values: SemanticValueConfig = field(default_factory=SemanticValueConfig)
+    frontier_weights: FrontierWeightConfig = field(default_factory=FrontierWeightConfig)
+    vlm: VLMSettings = field(default_factory=VLMSettings)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:

@@ -1,27 +1,39 @@
-"""Explore: choose the next frontier (plain FBE here), or say that nothing is left to explore."""
+"""Explore: choose the next frontier (FBE or semantic), or say that nothing is left to explore."""
 
 from __future__ import annotations
 
 import contextlib
 
+import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
 from agent.planning.explore import ExploreConfig, nearest_frontier, plan_move, reachable_frontiers
+from agent.planning.semantic import FrontierWeightConfig, method_flags, semantic_choice
 from agent.runtime.timing import StageTimer
 
 
 class SelectFrontier(py_trees.behaviour.Behaviour):
-    """Writes a `MovePlan` toward the nearest reachable frontier; FAILURE when there is none."""
+    """Writes a `MovePlan` toward a reachable frontier; FAILURE when there is none.
 
-    def __init__(self, config: ExploreConfig = ExploreConfig(), timer: StageTimer | None = None,
+    FBE takes the nearest frontier; the semantic methods sample one in proportion to its weight
+    from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator.
+    """
+
+    def __init__(self, config: ExploreConfig = ExploreConfig(), weights: FrontierWeightConfig = FrontierWeightConfig(),
+                 rng: np.random.Generator | None = None, timer: StageTimer | None = None,
                  name: str = "SelectFrontier") -> None:
         super().__init__(name)
         self.config = config
+        self.weights = weights
+        self.semantic = method_flags(config.method).use_semantic
+        self.rng = rng if rng is not None else np.random.default_rng(0)
         self.timer = timer
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.MAP, access=Access.READ)
+        if self.semantic:
+            self.blackboard.register_key(bb.SEMANTIC_MAP, access=Access.READ)
         self.blackboard.register_key(bb.OBSERVATION, access=Access.READ)
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
 
@@ -30,15 +42,17 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         robot_xy = self.blackboard.get(bb.OBSERVATION).base_pose[:2]
         with self.timer.measure("planning") if self.timer else contextlib.nullcontext():
             candidates = reachable_frontiers(world_map, robot_xy, self.config)
-            index = nearest_frontier(candidates)
+            if self.semantic:
+                index, _ = semantic_choice(candidates, self.blackboard.get(bb.SEMANTIC_MAP), self.weights, self.rng)
+            else:
+                index = nearest_frontier(candidates)
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
         self.blackboard.set(bb.PLAN, plan)
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.FAILURE
-        self.feedback_message = (
-            f"{len(candidates.frontiers)} frontiers; nearest at {plan.goal_distance_m:.1f} m"
-        )
+        rule = "sampled by semantic weight" if self.semantic else "nearest"
+        self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
 

@@ -21,16 +21,16 @@ def test_defaults() -> None:
     assert isinstance(config.bus.listen, tuple)
     assert config.map == OccupancyConfig() and config.map.tsdf == TsdfConfig()
     assert config.explore == ExploreConfig()
-    assert config.vlm == SimParams()
+    assert config.vlm.sim == SimParams()
     assert config.episode == EpisodeSettings()
     assert load_config(None, []) == Config()
 
 
 def test_override_nested_keys() -> None:
-    config = load_config(overrides=["map.tsdf.voxel_size=0.05", "explore.max_step_m=2.5", "vlm.seed=7"])
+    config = load_config(overrides=["map.tsdf.voxel_size=0.05", "explore.max_step_m=2.5", "vlm.sim.seed=7"])
     assert config.map.tsdf.voxel_size == 0.05
     assert config.explore.max_step_m == 2.5
-    assert config.vlm.seed == 7
+    assert config.vlm.sim.seed == 7
     # everything else keeps its default
     assert config.map.tsdf.depth_max == TsdfConfig().depth_max
     assert config.map.resolution == OccupancyConfig().resolution
@@ -51,10 +51,10 @@ def test_override_tuple_from_json_list() -> None:
 
 
 def test_override_fixed_length_tuple_of_floats() -> None:
-    config = load_config(overrides=["map.floor_band=[-0.2, 1]", "vlm.relevance_none=[2, 5.5]"])
+    config = load_config(overrides=["map.floor_band=[-0.2, 1]", "vlm.sim.relevance_none=[2, 5.5]"])
     assert config.map.floor_band == (-0.2, 1.0)
     assert all(isinstance(v, float) for v in config.map.floor_band)
-    assert config.vlm.relevance_none == (2.0, 5.5)
+    assert config.vlm.sim.relevance_none == (2.0, 5.5)
 
 
 def test_fixed_length_tuple_rejects_wrong_length() -> None:
@@ -111,11 +111,11 @@ def test_bool_is_not_an_int_or_a_number() -> None:
 
 
 def test_validation_from_sim_params_names_the_key() -> None:
-    with pytest.raises(ConfigError, match=r"vlm\.skill"):
-        load_config(overrides=["vlm.skill=3"])
-    with pytest.raises(ConfigError, match=r"vlm\.misread"):
-        load_config(overrides=["vlm.misread=-0.5"])
-    assert load_config(overrides=["vlm.skill=1"]).vlm.skill == 1.0
+    with pytest.raises(ConfigError, match=r"vlm\.sim\.skill"):
+        load_config(overrides=["vlm.sim.skill=3"])
+    with pytest.raises(ConfigError, match=r"vlm\.sim\.misread"):
+        load_config(overrides=["vlm.sim.misread=-0.5"])
+    assert load_config(overrides=["vlm.sim.skill=1"]).vlm.sim.skill == 1.0
 
 
 @pytest.mark.parametrize("item", ["camera.width", "=3", "", "novalue"])
@@ -141,7 +141,7 @@ resolution = 0.05
 [map.tsdf]
 voxel_size = 0.04
 
-[vlm]
+[vlm.sim]
 skill = 0.5
 """
     )
@@ -149,7 +149,7 @@ skill = 0.5
     assert config.camera.width == 640 and config.camera.hfov_deg == 70.0
     assert config.bus.listen == ("tcp/127.0.0.1:7000",)
     assert config.map.resolution == 0.05 and config.map.tsdf.voxel_size == 0.04
-    assert config.vlm.skill == 0.5
+    assert config.vlm.sim.skill == 0.5
     # overrides come after the file
     assert load_config(path, ["camera.width=1024"]).camera.width == 1024
 

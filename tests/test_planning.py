@@ -307,17 +307,16 @@ def test_plan_move_to_the_nearer_frontier_is_not_truncated() -> None:
     assert plan.goal_distance_m == pytest.approx(float(candidates.distances_m.min()))
 
 
-def test_plan_move_to_the_far_frontier_is_one_step_facing_along_the_path() -> None:
-    """The far frontier (around the corner) is cut to 3 m; the yaw follows the path, not the normal."""
+def test_plan_move_to_the_far_frontier_is_one_step_facing_along_its_normal() -> None:
+    """The far frontier (around the corner) is cut to 3 m; the robot ends facing the frontier's normal."""
     world_map = corridor_map()
     candidates = reachable_frontiers(world_map, ROBOT_XY)
     far = int(np.argmax(candidates.distances_m))
     plan = plan_move(candidates, far, ROBOT_XY)
     np.testing.assert_allclose(plan.path_xy[0], ROBOT_XY)
     assert path_length(plan.path_xy) == pytest.approx(3.0)
-    heading = plan.path_xy[-1] - plan.path_xy[-2]
-    assert plan.yaw == pytest.approx(math.atan2(heading[1], heading[0]))
-    assert abs(plan.yaw) < 0.3  # still driving along the corridor (+x), not up the leg (+y)
+    normal = candidates.frontiers[far].normal
+    assert plan.yaw == pytest.approx(math.atan2(normal[1], normal[0]))
     assert_stays_in_free_space(world_map, np.isfinite(candidates.field.metres), plan.path_xy)
 
 

@@ -175,12 +175,12 @@ def test_existence_question_says_yes_for_a_seen_object() -> None:
 
 @pytest.mark.parametrize("field, value", [("skill", 2.0), ("skill", -0.1), ("misread", 1.5)])
 def test_sim_params_out_of_range(field: str, value: float) -> None:
-    with pytest.raises(ValueError, match=rf"vlm\.{field}"):
+    with pytest.raises(ValueError, match=rf"vlm\.sim\.{field}"):
         SimParams(**{field: value})
 
 
 def test_sim_params_negative_scales() -> None:
-    with pytest.raises(ValueError, match=r"vlm\.notice_area_px"):
+    with pytest.raises(ValueError, match=r"vlm\.sim\.notice_area_px"):
         SimParams(notice_area_px=-1.0)
 
 

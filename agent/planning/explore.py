@@ -14,12 +14,19 @@ from agent.planning.paths import DistanceField, distance_field, simplify_path, t
 
 @dataclass(frozen=True)
 class ExploreConfig:
+    method: str = "fbe"  # fbe, semantic, semantic-no-lsv or semantic-no-gsv (agent.planning.semantic)
     max_step_m: float = 3.0  # path length the robot may drive between two observations
     min_frontier_distance_m: float = 0.5  # nearer frontiers are where the robot already stands
     min_frontier_size: int = 3
     min_unexplored_neighbours: int = 2
     comfort_m: float = 0.3  # beyond the robot's radius, clearance that paths prefer to keep
     obstacle_cost: float = 3.0  # extra cost per metre right at the robot's radius from an obstacle
+
+    def __post_init__(self) -> None:
+        from agent.planning.semantic import ExploreMethod  # semantic builds on this module
+
+        if self.method not in set(ExploreMethod):
+            raise ValueError(f"explore.method: {self.method!r} is not one of {', '.join(ExploreMethod)}")
 
 
 @dataclass(frozen=True)
@@ -65,7 +72,7 @@ def nearest_frontier(candidates: Candidates) -> int | None:
 
 def plan_move(candidates: Candidates, index: int, robot_xy: tuple[float, float],
               config: ExploreConfig = ExploreConfig()) -> MovePlan:
-    """A path toward frontier ``index``, cut to one step, facing along the path or the frontier normal."""
+    """A path toward frontier ``index``, cut to one step, ending with the heading of the frontier normal."""
     frontier = candidates.frontiers[index]
     robot_xy = np.asarray(robot_xy, dtype=float)
     field = candidates.field
@@ -75,9 +82,5 @@ def plan_move(candidates: Candidates, index: int, robot_xy: tuple[float, float],
     waypoints = np.vstack([robot_xy, field.spec.to_world(cells[1:])]) if len(cells) > 1 else np.array([robot_xy])
     full = simplify_path(waypoints)
     path = truncate_path(full, config.max_step_m)
-    truncated = not np.allclose(path[-1], full[-1])
-    if truncated and len(path) >= 2:
-        heading = path[-1] - path[-2]
-    else:
-        heading = frontier.normal
+    heading = frontier.normal  # look into the unexplored space beyond the frontier
     return MovePlan(path, math.atan2(heading[1], heading[0]), frontier, float(candidates.distances_m[index]))

@@ -20,13 +20,16 @@ from agent.bus.session import free_tcp_endpoint, open_session
 from agent.config import Config
 from agent.eqa.answers import AnswerLog
 from agent.mapping.occupancy import ExplorationMap
+from agent.planning.semantic import method_flags, new_semantic_map
 from agent.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
 from agent.runtime.plots import save_map_png
 from agent.runtime.record import SnapshotLog, write_json_atomic
 from agent.runtime.timing import StageTimer
 from agent.runtime.world_link import WorldLink
 from agent.runtime.world_process import WorldProcess, WorldStartError
-from agent.vlm.sim import SimulatedVLM
+from agent.vlm.backends import make_vlm
+from agent.vlm.errors import VLMError
+from agent.vlm.protocol import VisionLanguageModel
 from behaviours.eqa_tree import EqaTreeParts, build_eqa_tree
 from worlds.vocabulary import LETTERS
 
@@ -72,6 +75,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
     session = open_session(listen=list(config.bus.listen), connect=[endpoint])
     link = WorldLink(session, keys, config.bus.query_timeout_s)
     try:
+        vlm = make_vlm(config.vlm)  # a bad model path or backend fails now, before any world starts
         if request.connect is None:
             world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
             world.wait_ready(link, config.bus.world_start_timeout_s)
@@ -85,9 +89,9 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         reset = link.call("reset", reset_request, timeout_s=config.bus.world_start_timeout_s)
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
-        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, link, session,
+        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, link, session,
                                                    keys, folder, timer, extra_sinks or [])
-    except (WorldStartError, QueryFailed, KeyError) as error:
+    except (WorldStartError, QueryFailed, KeyError, VLMError) as error:
         reason = f"the episode could not start: {error}"
         result.update({"status": "failed", "reason": reason, "correct": False})
         write_json_atomic(folder / "result.json", result)
@@ -109,6 +113,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
 
 
 def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any], config: Config,
+              vlm: VisionLanguageModel,
               link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
               extra_sinks: list[SnapshotSink]) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
@@ -127,8 +132,12 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     for key, value in initial.items():
         writer.register_key(key, access=py_trees.common.Access.WRITE)
         writer.set(key, value)
-    parts = EqaTreeParts(link, SimulatedVLM(config.vlm), config.explore, config.episode.vlm_timeout_s,
-                         config.bus.move_timeout_s, timer)
+    if method_flags(config.explore.method).use_semantic:
+        writer.register_key(bb.SEMANTIC_MAP, access=py_trees.common.Access.WRITE)
+        writer.set(bb.SEMANTIC_MAP, new_semantic_map(initial[bb.MAP].spec, config.explore.method, config.semantic_values))
+    parts = EqaTreeParts(link, vlm, config.explore, config.episode.vlm_timeout_s,
+                         config.bus.move_timeout_s, timer, config.prompt_points, config.semantic_values,
+                         config.frontier_weights, int(scenario["seed"]), folder / "prompts")
     publisher = session.declare_publisher(keys.agent_tree)
     events = session.declare_publisher(keys.agent_events)
     snapshot_log = SnapshotLog(folder / "snapshots.jsonl")

@@ -64,10 +64,10 @@ class SimParams:
         for name in ("skill", "misread", "mark_window"):
             value = getattr(self, name)
             if not 0.0 <= value <= 1.0:
-                raise ValueError(f"vlm.{name}: {value} must lie in [0, 1]")
+                raise ValueError(f"vlm.sim.{name}: {value} must lie in [0, 1]")
         for name in ("notice_area_px", "notice_distance_m", "logit_noise", "direction_gain"):
             if getattr(self, name) < 0:
-                raise ValueError(f"vlm.{name}: must not be negative")
+                raise ValueError(f"vlm.sim.{name}: must not be negative")
 
 
 @dataclass(frozen=True)
