@@ -142,3 +142,33 @@ def test_a_bad_setting_is_rejected_with_its_name() -> None:
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "map.resolution" in done.stderr
+
+
+def test_a_semantic_episode_shows_the_vlm_its_visual_prompts(tmp_path: Path) -> None:
+    config = load_config(overrides=[f'bus.listen=["{free_tcp_endpoint()}"]', "episode.budget=6",
+                                    "explore.method=semantic"])
+    result = run_episode(RunRequest(seed=4, config=config, out_root=tmp_path))
+    assert result["status"] == "answered", result["reason"]
+    images = sorted((Path(result["folder"]) / "prompts").glob("step-*.png"))
+    assert images and images[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    log = Path(result["folder"]) / "snapshots.jsonl"
+    messages = {b["message"] for line in log.read_text().splitlines() for b in json.loads(line)["behaviours"]
+                if b["name"] == "QueryDirections" and b["status"] == "SUCCESS"}
+    assert any("LSV favours" in m for m in messages)
+
+
+def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
+    from agent.eval.explore import evaluate_explore
+    from worlds.suite import plan_split, write_suite
+
+    suite = write_suite(tmp_path / "suite", plan_split(2, [2], 50, ("suite",)))["suite"]
+    config = load_config(overrides=["bus.listen=[]", "episode.budget=4"])
+    out = tmp_path / "eval"
+    report = evaluate_explore(suite, ["fbe", "semantic"], out, workers=2, config=config)
+    lines = (out / "explore-results.jsonl").read_text().splitlines()
+    assert len(lines) == 4 and report["failed"] == 0
+    assert set(report["curves"]) == {"fbe", "semantic"} and report["counts"] == {"fbe": 2, "semantic": 2}
+    assert (out / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "curves.csv").read_text().startswith("normalised_time,fbe (n=2),semantic (n=2)")
+    evaluate_explore(suite, ["fbe", "semantic"], out, workers=2, config=config)  # nothing left to do
+    assert (out / "explore-results.jsonl").read_text().splitlines() == lines
