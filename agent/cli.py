@@ -48,6 +48,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
     run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
     run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
+    run.add_argument("--method", choices=("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv"),
+                     help="exploration method (default fbe; same as --set explore.method=…)")
     run.set_defaults(handler=_run)
 
     watch = commands.add_parser("watch", help="show a running agent's behaviour tree live")
@@ -124,6 +126,8 @@ def _run(args: argparse.Namespace) -> int:
     from agent.runtime.run import RunError, RunRequest, run_episode
     from agent.runtime.progress import StepPrinter
 
+    if args.method:
+        args.set.append(f"explore.method={args.method}")
     config = _load(args)
     request = RunRequest(seed=args.seed, config=config, out_root=args.out, connect=args.connect,
                          namespace=args.namespace)
