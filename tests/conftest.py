@@ -1,4 +1,4 @@
-"""Shared fixtures: a world served over real Zenoh on loopback, for any test that needs one."""
+"""Shared fixtures: a PyBullet client, and a world served over real Zenoh on loopback."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import threading
 import uuid
 from collections.abc import Iterator
 
+import pybullet as p
 import pytest
 import zenoh
 
@@ -13,6 +14,15 @@ from agent.bus.keys import Keys
 from agent.bus.liveness import LivenessWatch
 from agent.bus.session import free_tcp_endpoint, open_session
 from worlds.server import WorldServer
+
+
+@pytest.fixture
+def client() -> Iterator[int]:
+    """A PyBullet DIRECT client with gravity, disconnected afterwards."""
+    cid = p.connect(p.DIRECT)
+    p.setGravity(0.0, 0.0, -9.81, physicsClientId=cid)
+    yield cid
+    p.disconnect(cid)
 
 
 @pytest.fixture

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 
 import numpy as np
 import pinocchio
@@ -19,14 +18,6 @@ from worlds.urdf import handle_boxes, part_transform, storage_urdf
 SEEDS = (0, 1, 2, 3)
 CASES = [(model, seed) for model in MODELS for seed in SEEDS]
 WHITE = (0.9, 0.9, 0.9, 1.0)
-
-
-@pytest.fixture
-def client() -> Iterator[int]:
-    cid = p.connect(p.DIRECT)
-    p.setGravity(0.0, 0.0, -9.81, physicsClientId=cid)
-    yield cid
-    p.disconnect(cid)
 
 
 def _model(name: str, seed: int) -> StorageModel:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator
 from pathlib import Path
 
 import networkx as nx
@@ -19,14 +18,6 @@ from worlds.tabletop import TASKS, VARIANTS, build_tabletop, tabletop_variant, w
 from worlds.tabletop_scene import TABLE_ID, TabletopScene
 
 ALL = [(task, seed) for task in TASKS for seed in range(VARIANTS)]
-
-
-@pytest.fixture
-def client() -> Iterator[int]:
-    cid = p.connect(p.DIRECT)
-    p.setGravity(0.0, 0.0, -9.81, physicsClientId=cid)
-    yield cid
-    p.disconnect(cid)
 
 
 def _graph(acsg: dict) -> nx.DiGraph:
