@@ -21,7 +21,7 @@ def main(argv: list[str] | None = None) -> int:
 
         return world_main(argv[1:])
     if argv[:1] == ["scene"]:
-        from worlds.scene_tools import main as scene_main
+        from worlds.scene_cli import main as scene_main
 
         return scene_main(argv[1:])
     parser = _parser()
@@ -222,7 +222,7 @@ def _suite_tabletop(args: argparse.Namespace) -> int:
 
 def _bench_world(args: argparse.Namespace) -> int:
     from agent.bench import dump, format_world_table
-    from worlds.scene_tools import bench_world
+    from worlds.scene_cli import bench_world
 
     try:
         areas = tuple(float(a) for a in args.areas.split(","))

@@ -4,7 +4,7 @@ Questions about state ("Is the TV in the living room on or off?") are answered b
 switch must change the picture: a lamp's shade glows when it is on, a TV's screen is lit or black,
 a stove's burners glow red, a curtain is drawn across its window or bunched at its sides. This is
 a pure mapping from a `Furniture` piece or an `Item` to `Visual` primitives in world coordinates;
-worlds.scene turns them into one body per thing (one label), and worlds.scene_tools draws the
+worlds.scene turns them into one body per thing (one label), and worlds.scene_cli draws the
 same states from above. Storage furniture is not drawn here: its parts come from worlds.urdf.
 """
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from worlds.home import generate_home
-from worlds.scene_tools import bench_world, main
+from worlds.scene_cli import bench_world, main
 from worlds.spec import dump_spec, read_spec_file
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
