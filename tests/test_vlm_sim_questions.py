@@ -90,3 +90,20 @@ def test_gsv_is_higher_for_views_of_likely_rooms() -> None:
         return probs["Yes"]
 
     assert np.mean([gsv("kitchen", i) for i in range(30)]) > np.mean([gsv("garage", i) for i in range(30)]) + 0.2
+
+
+def test_lsv_follows_the_named_room_over_habit() -> None:
+    """Asked about a mug in the bathroom, the bathroom beats the kitchen where mugs usually are."""
+    question = "What colour is the mug in the bathroom?"
+    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the kitchen floor, B over the bathroom's
+    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("kitchen", "bathroom")), question, marks)["B"] > 0.5
+               for s in range(20))
+    assert wins >= 17
+
+
+def test_lsv_uses_habit_when_no_room_is_named() -> None:
+    question = "Which room is the red toothbrush in?"
+    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the bedroom floor, B over the bathroom's
+    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("bedroom", "bathroom")), question, marks)["B"] > 0.5
+               for s in range(20))
+    assert wins >= 17

@@ -49,6 +49,9 @@ ROOM_AFFINITY: dict[str, dict[str, float]] = {
 #: How much a view that leads on (through a doorway, into another room) is worth by itself.
 DOORWAY_VALUE = 0.35
 
+#: How much a view of the room the question names is worth ("… in the kitchen?": the kitchen).
+NAMED_ROOM_VALUE = 0.95
+
 
 def affinity(category: str | None, room_name: str) -> float:
     """How likely a thing of ``category`` is to be found in a room of this name's type."""

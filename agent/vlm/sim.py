@@ -231,7 +231,12 @@ class SimulatedVLM:
             if target is not None and label.category == target and count >= 20:
                 value = 1.0  # the thing itself is right there
         if rooms:
-            value = max(value, max(commonsense.affinity(target, room) for room in rooms))
+            if question is not None and question.room is not None:
+                # The question names the room: that room is where to go, whatever usually lives where.
+                named = commonsense.NAMED_ROOM_VALUE if question.room in rooms else commonsense.UNLISTED
+                value = max(value, named)
+            else:
+                value = max(value, max(commonsense.affinity(target, room) for room in rooms))
             here = _room_at_feet(observation)
             if any(room != here for room in rooms):
                 value = max(value, commonsense.DOORWAY_VALUE + 0.5 * value)
