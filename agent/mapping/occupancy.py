@@ -27,7 +27,7 @@ from agent.mapping.tsdf import TsdfConfig, TsdfMap, Voxels
 class OccupancyConfig:
     """Heights and thresholds of the 2D projection, in metres unless said otherwise."""
 
-    size_m: float = 32.0
+    size_m: float = 48.0  # the largest homes are 22.4 m long, and the robot may start at one end
     resolution: float = 0.1
     floor_band: tuple[float, float] = (-0.12, 0.08)
     obstacle_min_z: float = 0.12
