@@ -16,6 +16,9 @@ import open3d.core as o3c
 
 from agent.mapping.camera import Intrinsics
 
+# open3d reports its memory pools at interpreter exit as warnings; they are not problems of ours.
+o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+
 
 @dataclass(frozen=True)
 class TsdfConfig:
