@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from agent.eqa.prompts import YES_NO, answer_prompt, gsv_prompt, lsv_prompt
 from agent.mapping.camera import Intrinsics
@@ -74,11 +75,16 @@ def lsv(vlm: SimulatedVLM, observation: Observation, question: str, marks: dict[
     return vlm.probabilities(VisualQuery(observation, lsv_prompt(question), ("A", "B"), marks))
 
 
-def test_lsv_points_toward_the_room_where_such_things_are_kept() -> None:
-    question = "Is there a red toothbrush in the bathroom?"
-    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the bedroom floor, B over the bathroom's
-    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("bedroom", "bathroom")), question, marks)["B"] > 0.5
-               for s in range(20))
+@pytest.mark.parametrize("question, rooms", [
+    # a room named in the question wins over habit (mugs usually live in kitchens) ...
+    ("What colour is the mug in the bathroom?", ("kitchen", "bathroom")),
+    ("Is there a red toothbrush in the bathroom?", ("bedroom", "bathroom")),
+    # ... and without a named room, habit decides: toothbrushes live in bathrooms
+    ("Which room is the red toothbrush in?", ("bedroom", "bathroom")),
+])
+def test_lsv_points_toward_the_room_to_explore(question: str, rooms: tuple[str, str]) -> None:
+    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the first room's floor, B over the second's
+    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], rooms), question, marks)["B"] > 0.5 for s in range(20))
     assert wins >= 17
 
 
@@ -90,20 +96,3 @@ def test_gsv_is_higher_for_views_of_likely_rooms() -> None:
         return probs["Yes"]
 
     assert np.mean([gsv("kitchen", i) for i in range(30)]) > np.mean([gsv("garage", i) for i in range(30)]) + 0.2
-
-
-def test_lsv_follows_the_named_room_over_habit() -> None:
-    """Asked about a mug in the bathroom, the bathroom beats the kitchen where mugs usually are."""
-    question = "What colour is the mug in the bathroom?"
-    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the kitchen floor, B over the bathroom's
-    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("kitchen", "bathroom")), question, marks)["B"] > 0.5
-               for s in range(20))
-    assert wins >= 17
-
-
-def test_lsv_uses_habit_when_no_room_is_named() -> None:
-    question = "Which room is the red toothbrush in?"
-    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}  # A over the bedroom floor, B over the bathroom's
-    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [], ("bedroom", "bathroom")), question, marks)["B"] > 0.5
-               for s in range(20))
-    assert wins >= 17

@@ -48,7 +48,7 @@ class HuggingFaceVLM:
             model = AutoModelForImageTextToText.from_pretrained(self.path, local_files_only=True, dtype=dtype)
         except (OSError, ValueError, KeyError) as error:
             raise VLMError(f"could not load a vision-language model and its processor from {self.path}: {error}") from None
-        self.model = model.to(self.device).eval()
+        self.model = model.to(self.device).train(False)  # inference mode: no dropout
         self.tokenizer = self.processor.tokenizer
         self._token_ids: dict[str, tuple[int, ...]] = {}
         log.info("hf VLM: %s from %s on %s", type(self.model).__name__, self.path, self.device)
