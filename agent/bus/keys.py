@@ -18,9 +18,6 @@ from dataclasses import dataclass
 
 _NAMESPACE = re.compile(r"^[A-Za-z0-9_\-]+(/[A-Za-z0-9_\-]+)*$")
 
-WORLD_VERBS = ("reset", "observe", "move_base")
-
-
 def check_namespace(namespace: str) -> str:
     """Return ``namespace`` if it is a plain key prefix (no wildcards, no empty chunks)."""
     if not _NAMESPACE.match(namespace):

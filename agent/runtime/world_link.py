@@ -28,9 +28,5 @@ class WorldLink:
     def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None) -> Message:
         return self.request(verb, meta, timeout_s).wait()
 
-    def describe(self) -> Message:
-        return PendingReply(self.session, self.keys.world_description, None, None, self.timeout_s,
-                            self.liveness.gone).wait()
-
     def close(self) -> None:
         self.liveness.close()
