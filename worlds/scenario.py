@@ -138,25 +138,29 @@ def _words_but(rng: np.random.Generator, words: list[str], answer: str, preferre
     return chosen
 
 
+def _unique_visible(rng: np.random.Generator, facts: HomeFacts, slots: tuple[str, ...],
+                    counted: list[Any]) -> Any | None:
+    """A visible object that is the only one among ``counted`` with its values of ``slots``, so a
+    question naming those values has one answer; None when there is none."""
+    counts = Counter(tuple(getattr(thing, slot) for slot in slots) for thing in counted)
+    unique = [o for o in facts.visible_objects() if counts[tuple(getattr(o, slot) for slot in slots)] == 1]
+    return _pick(rng, unique) if unique else None
+
+
 def _object_colour_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """Which object in the {room} is {colour}? (one visible thing of that colour in the room)"""
-    things = Counter((o.room, o.colour) for o in facts.home.objects)
-    things += Counter((f.room, f.colour) for f in facts.home.furniture)
-    unique = [o for o in facts.visible_objects() if things[(o.room, o.colour)] == 1]
-    if not unique:
+    item = _unique_visible(rng, facts, ("room", "colour"), [*facts.home.objects, *facts.home.furniture])
+    if item is None:
         return None
-    item = _pick(rng, unique)
     return {"room": item.room, "colour": item.colour}, item.category, _shuffled(
         rng, item.category, _words_but(rng, list(OBJECTS), item.category))
 
 
 def _colour_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """What colour is the {category} in the {room}? (one such object in the room, visible)"""
-    counts = Counter((o.room, o.category) for o in facts.home.objects)
-    unique = [o for o in facts.visible_objects() if counts[(o.room, o.category)] == 1]
-    if not unique:
+    item = _unique_visible(rng, facts, ("room", "category"), facts.home.objects)
+    if item is None:
         return None
-    item = _pick(rng, unique)
     return {"room": item.room, "category": item.category}, item.colour, _shuffled(
         rng, item.colour, _words_but(rng, list(COLOURS), item.colour))
 
@@ -258,11 +262,9 @@ def _door_state(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
 
 def _room_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """Which room is the {colour} {category} in? (one such object in the home, visible)"""
-    counts = Counter((o.colour, o.category) for o in facts.home.objects)
-    unique = [o for o in facts.visible_objects() if counts[(o.colour, o.category)] == 1]
-    if not unique:
+    item = _unique_visible(rng, facts, ("colour", "category"), facts.home.objects)
+    if item is None:
         return None
-    item = _pick(rng, unique)
     here = [r.name for r in facts.home.rooms]
     return {"colour": item.colour, "category": item.category}, item.room, _shuffled(
         rng, item.room, _words_but(rng, list(ROOM_TYPES), item.room, preferred=here))
