@@ -47,19 +47,11 @@ class Job:
 
 def finished_keys(path: Path) -> set[tuple[str, str]]:
     """The (entry id, variant) pairs already in a results file (a torn last line is ignored)."""
-    if not path.exists():
-        return set()
-    keys = set()
-    for line in path.read_text(encoding="utf-8").splitlines():
-        try:
-            result = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        keys.add((result["id"], result["variant"]))
-    return keys
+    return {(result["id"], result["variant"]) for result in read_results(path)}
 
 
 def read_results(path: Path) -> list[dict[str, Any]]:
+    """Every whole result line of a results file; a torn line from an interrupted run is skipped."""
     results = []
     for line in path.read_text(encoding="utf-8").splitlines() if path.exists() else []:
         try:
