@@ -48,10 +48,20 @@ class GridSpec:
         )
 
     def disc(self, centre_xy: tuple[float, float], radius_m: float) -> np.ndarray:
-        """A boolean grid that is true on cells whose centre lies within ``radius_m`` of the point."""
-        rows, cols = np.indices(self.shape)
+        """A boolean grid that is true on cells whose centre lies within ``radius_m`` of the point.
+
+        Only the window around the disc is computed: the map is large and this runs every step.
+        """
+        mask = np.zeros(self.shape, dtype=bool)
+        centre = np.asarray(centre_xy, dtype=float)
+        low = np.maximum(self.to_cell(centre - radius_m), 0)
+        high = np.minimum(self.to_cell(centre + radius_m) + 1, self.shape)
+        if np.any(low >= high):
+            return mask
+        rows, cols = np.mgrid[low[0]:high[0], low[1]:high[1]]
         centres = self.to_world(np.stack([rows, cols], axis=-1))
-        return np.hypot(centres[..., 0] - centre_xy[0], centres[..., 1] - centre_xy[1]) <= radius_m
+        mask[low[0]:high[0], low[1]:high[1]] = np.hypot(centres[..., 0] - centre[0], centres[..., 1] - centre[1]) <= radius_m
+        return mask
 
     def extent(self) -> tuple[float, float, float, float]:
         """(xmin, xmax, ymin, ymax), for plotting."""
