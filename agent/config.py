@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agent.eqa.stopping import StopConfig
 from agent.mapping.occupancy import OccupancyConfig
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.planning.explore import ExploreConfig
@@ -60,6 +61,7 @@ class Config:
     semantic_values: SemanticValueConfig = field(default_factory=SemanticValueConfig)
     frontier_weights: FrontierWeightConfig = field(default_factory=FrontierWeightConfig)
     vlm: VLMSettings = field(default_factory=VLMSettings)
+    stop: StopConfig = field(default_factory=StopConfig)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:

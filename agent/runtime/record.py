@@ -8,10 +8,14 @@ from pathlib import Path
 from typing import Any
 
 
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write through a temporary file and rename, so a reader never sees half a file."""
+def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
+    """Write through a temporary file and rename, so a reader never sees half a file.
+
+    ``indent=None`` writes compact JSON, for large files people do not read by eye.
+    """
     temporary = path.with_suffix(path.suffix + ".tmp")
-    temporary.write_text(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+    separators = None if indent is not None else (",", ":")
+    temporary.write_text(json.dumps(data, indent=indent, separators=separators, ensure_ascii=False) + "\n")
     os.replace(temporary, path)
 
 
