@@ -11,3 +11,7 @@ TRAJECTORY = "trajectory"  # list[tuple[float, float, float]], every base pose r
 EXPLORATION_COMPLETE = "exploration_complete"  # bool, no reachable frontier is left
 ANSWER = "answer"  # dict, written once when the episode answers
 SEMANTIC_MAP = "semantic_map"  # agent.mapping.semantic_map.SemanticMap, semantic methods only
+STOP_DECISION = "stop_decision"  # agent.eqa.stopping.StopDecision once the stopping rule decides, else None
+PREDICTION_SET = "prediction_set"  # list[str], the running conformal set (cp rule only, else None)
+Q_HAT = "q_hat"  # float, the calibrated conformal threshold q̂ (cp rule only, else None)
+EPSILON = "epsilon"  # float, the miscoverage ε the user accepts (cp rule only, else None)

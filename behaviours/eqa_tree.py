@@ -1,14 +1,20 @@
-"""The EQA episode tree: explore, query the VLM, and answer when the budget is spent.
+"""The EQA episode tree: explore, query the VLM, check confidence, and answer.
 
 ::
 
     EQA episode (selector: until answered)
+    ├─ Confident (sequence)         CheckConfidence → Answer
     ├─ Out of budget (sequence)     BudgetSpent → AnswerFallback
-    └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → [QueryDirections] → Next move
-                                    Next move (selector): Explore (SelectFrontier → Navigate)
-                                                          or NothingLeftToExplore
+    └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → UpdatePredictionSet → Next move
+                                    Next move (selector): StopHere (CheckConfidence)
+                                                          or Go on: [QueryDirections] → Explore
+                                    Explore (sequence):   SelectFrontier → Move or finish
+                                    Move or finish (sel.): NothingLeftToExplore (no frontier planned)
+                                                          or Navigate
 
-QueryDirections (the VLM's semantic values of directions) is there for the semantic methods only.
+The stopping rule (conformal prediction by default) decides in UpdatePredictionSet; a confident
+robot skips its next move and answers on the following tick. QueryDirections (the VLM's semantic
+values of directions) is there for the semantic methods only.
 """
 
 from __future__ import annotations
@@ -26,7 +32,9 @@ from agent.planning.semantic import FrontierWeightConfig, method_flags
 from agent.runtime.timing import StageTimer
 from agent.runtime.world_link import WorldLink
 from agent.vlm.protocol import VisionLanguageModel
-from behaviours.answer import AnswerFallback, ShouldStop
+from agent.eqa.stopping import BudgetRule, StoppingRule
+from behaviours.answer import Answer, AnswerFallback, ShouldStop
+from behaviours.confidence import CheckConfidence, UpdatePredictionSet
 from behaviours.explore import MarkExplorationComplete, SelectFrontier
 from behaviours.integrate_map import IntegrateMap
 from behaviours.navigate import Navigate
@@ -50,25 +58,33 @@ class EqaTreeParts:
     frontier_weights: FrontierWeightConfig = field(default_factory=FrontierWeightConfig)
     seed: int = 0  # seeds prompt-point sampling and frontier sampling
     images_dir: Path | None = None  # where the annotated images of visual prompts are saved
+    stopping: StoppingRule = field(default_factory=BudgetRule)
 
 
 def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     timer = parts.timer
+    confident = py_trees.composites.Sequence(
+        "Confident", memory=False, children=[CheckConfidence(), Answer()]
+    )
     out_of_budget = py_trees.composites.Sequence(
         "Out of budget", memory=False, children=[ShouldStop(), AnswerFallback()]
     )
     rng = np.random.default_rng([parts.seed, 7])
-    explore = py_trees.composites.Sequence(
-        "Explore", memory=True,
-        children=[SelectFrontier(parts.explore, parts.frontier_weights, rng, timer),
-                  Navigate(parts.link, parts.move_timeout_s)],
+    move_or_finish = py_trees.composites.Selector(
+        "Move or finish", memory=False, children=[MarkExplorationComplete(), Navigate(parts.link, parts.move_timeout_s)]
     )
-    next_move = py_trees.composites.Selector(
-        "Next move", memory=False, children=[explore, MarkExplorationComplete()]
-    )
-    leaves = [Observe(parts.link, timer), IntegrateMap(timer), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer)]
+    explore: py_trees.behaviour.Behaviour = py_trees.composites.Sequence("Explore", memory=True, children=[
+        SelectFrontier(parts.explore, parts.frontier_weights, rng, timer), move_or_finish,
+    ])
     if method_flags(parts.explore.method).use_semantic:
-        leaves.append(QueryDirections(parts.vlm, parts.explore.method, rng, parts.prompt_points,
-                                      parts.semantic_values, parts.vlm_timeout_s, timer, parts.images_dir))
-    step = py_trees.composites.Sequence("Step", memory=True, children=[*leaves, next_move])
-    return py_trees.composites.Selector("EQA episode", memory=False, children=[out_of_budget, step])
+        directions = QueryDirections(parts.vlm, parts.explore.method, rng, parts.prompt_points,
+                                     parts.semantic_values, parts.vlm_timeout_s, timer, parts.images_dir)
+        explore = py_trees.composites.Sequence("Go on", memory=True, children=[directions, explore])
+    next_move = py_trees.composites.Selector(
+        "Next move", memory=False, children=[CheckConfidence("StopHere"), explore]
+    )
+    step = py_trees.composites.Sequence("Step", memory=True, children=[
+        Observe(parts.link, timer), IntegrateMap(timer), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer),
+        UpdatePredictionSet(parts.stopping), next_move,
+    ])
+    return py_trees.composites.Selector("EQA episode", memory=False, children=[confident, out_of_budget, step])

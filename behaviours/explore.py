@@ -15,7 +15,10 @@ from agent.runtime.timing import StageTimer
 
 
 class SelectFrontier(py_trees.behaviour.Behaviour):
-    """Writes a `MovePlan` toward a reachable frontier; FAILURE when there is none.
+    """Writes a `MovePlan` toward a reachable frontier, or no plan when there is none.
+
+    It succeeds either way: "no frontier" is an answer, not a failure, and `NothingLeftToExplore`
+    acts on it. Keeping the two apart means a move that fails later is reported as that failure.
 
     FBE takes the nearest frontier; the semantic methods sample one in proportion to its weight
     from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator.
@@ -50,21 +53,29 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.blackboard.set(bb.PLAN, plan)
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
-            return Status.FAILURE
+            return Status.SUCCESS
         rule = "sampled by semantic weight" if self.semantic else "nearest"
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
 
 class MarkExplorationComplete(py_trees.behaviour.Behaviour):
-    """Records that the home has no reachable frontier left, so the episode can answer now."""
+    """Records that the home has no reachable frontier left, so the episode can answer now.
+
+    SUCCESS only when `SelectFrontier` found no frontier (no plan); FAILURE otherwise, so the
+    move toward the planned frontier runs next.
+    """
 
     def __init__(self, name: str = "NothingLeftToExplore") -> None:
         super().__init__(name)
         self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(bb.PLAN, access=Access.READ)
         self.blackboard.register_key(bb.EXPLORATION_COMPLETE, access=Access.WRITE)
 
     def update(self) -> Status:
+        if self.blackboard.get(bb.PLAN) is not None:
+            self.feedback_message = "a frontier is planned"
+            return Status.FAILURE
         self.blackboard.set(bb.EXPLORATION_COMPLETE, True)
         self.feedback_message = "every reachable frontier has been explored"
         return Status.SUCCESS

@@ -22,7 +22,7 @@ pytestmark = pytest.mark.slow
 
 
 def _config(agent_endpoint: str, budget: int):
-    return load_config(overrides=[f'bus.listen=["{agent_endpoint}"]', f"episode.budget={budget}"])
+    return load_config(overrides=[f'bus.listen=["{agent_endpoint}"]', f"episode.budget={budget}", "stop.rule=budget"])
 
 
 def test_episode_answers_while_a_separate_subscriber_receives_snapshots(tmp_path: Path) -> None:
@@ -167,6 +167,7 @@ def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
     report = evaluate_explore(suite, ["fbe", "semantic"], out, workers=2, config=config)
     lines = (out / "explore-results.jsonl").read_text().splitlines()
     assert len(lines) == 4 and report["failed"] == 0
+    assert [json.loads(line)["steps"] for line in lines] == [4] * 4  # every method runs to its budget
     assert set(report["curves"]) == {"fbe", "semantic"} and report["counts"] == {"fbe": 2, "semantic": 2}
     assert (out / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "curves.csv").read_text().startswith("normalised_time,fbe (n=2),semantic (n=2)")

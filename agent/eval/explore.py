@@ -6,14 +6,13 @@ normalised time, drawn from each episode's per-step scores (`agent.eval.curves`)
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
 from agent.config import Config
 from agent.eval.curves import TAU_GRID, plot_curves, success_curves, write_curves_csv
-from agent.eval.runner import Job, read_results, run_jobs
+from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from worlds.suite import read_suite
 
 METHODS = ("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv")
@@ -26,30 +25,19 @@ def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job
         raise ValueError(f"--methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})")
     entries = read_suite(suite)[:limit]
     return [
-        Job(entry["id"], method, entry["seed"], entry["scenario"], (f"explore.method={method}",))
+        Job(entry["id"], method, entry["seed"], entry["scenario"], (f"explore.method={method}", "stop.rule=budget"))
         for entry in entries
         for method in methods
     ]
 
 
 def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: int, config: Config,
-                     limit: int | None = None) -> dict[str, Any]:
+                     limit: int | None = None, worlds: list[WorldAddress] | None = None) -> dict[str, Any]:
     """Run what is missing, then write ``curves.csv`` and ``curves.png``; return the curves."""
     jobs = explore_jobs(suite, methods, limit)
     results_path = out_dir / "explore-results.jsonl"
-    started = time.monotonic()
-
-    def progress(done: int, total: int, result: dict[str, Any]) -> None:
-        rate = (time.monotonic() - started) / done
-        sys.stderr.write(f"\r  {done}/{total} episodes, last {result['variant']} {result['id']} "
-                         f"({result['status']}), about {rate * (total - done) / 60:.1f} min left   ")
-        sys.stderr.flush()
-
-    ran = run_jobs(jobs, results_path, workers, config, progress)
-    if ran:
-        sys.stderr.write("\n")
-    wanted = {job.key for job in jobs}
-    results = [r for r in read_results(results_path) if (r["id"], r["variant"]) in wanted]
+    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds)
+    results = results_for(jobs, results_path)
     for result in results:
         result["method"] = result["variant"]
     curves = success_curves(results)

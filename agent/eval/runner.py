@@ -1,7 +1,9 @@
 """Running many episodes in parallel worker processes, appending each result as it finishes.
 
 Each worker process starts one world child process of its own and resets it per episode, so a
-world's start-up is paid once per worker, not once per episode. Results go to a JSON-lines file,
+world's start-up is paid once per worker, not once per episode. Given running worlds instead
+(``homebot world`` on other machines, each named by its Zenoh endpoint), one worker joins each of
+them, so the same command spreads its episodes over several machines. Results go to a JSON-lines file,
 one line per finished episode, flushed at once; a rerun skips the (scenario, variant) pairs already
 in the file, so an interrupted evaluation loses nothing and redoes nothing.
 """
@@ -22,12 +24,27 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agent.bus.session import free_tcp_endpoint
+from agent.bus.keys import check_namespace
+from agent.bus.session import check_endpoint, free_tcp_endpoint
 from agent.config import Config, load_config
 from agent.runtime.run import RunError, RunRequest, run_episode
 from agent.runtime.world_process import WorldProcess
 
 log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class WorldAddress:
+    """A running world to join: its Zenoh endpoint and the namespace it serves under."""
+
+    endpoint: str
+    namespace: str = "homebot/default"
+
+    @classmethod
+    def parse(cls, text: str) -> WorldAddress:
+        """``tcp/host:port`` or ``namespace@tcp/host:port``, checked."""
+        namespace, sep, endpoint = text.strip().rpartition("@")
+        return cls(check_endpoint(endpoint), check_namespace(namespace) if sep else "homebot/default")
 
 
 @dataclass(frozen=True)
@@ -62,8 +79,13 @@ def read_results(path: Path) -> list[dict[str, Any]]:
 
 
 def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Config,
-             progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> int:
-    """Run the jobs not yet in ``results_path``; return how many ran now."""
+             progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+             worlds: list[WorldAddress] | None = None) -> int:
+    """Run the jobs not yet in ``results_path``; return how many ran now.
+
+    Without ``worlds`` each of ``workers`` processes starts its own world; with them there is one
+    worker per listed world and ``workers`` is ignored.
+    """
     done = finished_keys(results_path)
     todo = [job for job in jobs if job.key not in done]
     results_path.parent.mkdir(parents=True, exist_ok=True)
@@ -71,8 +93,12 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         return 0
     _repair_torn_tail(results_path)
     context = multiprocessing.get_context("spawn")
+    addresses = context.Queue()
+    for address in worlds or []:
+        addresses.put(address)
     with open(results_path, "a", encoding="utf-8") as out, ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=_start_worker_world, initargs=(base_config,)
+        max_workers=len(worlds) if worlds else workers, mp_context=context, initializer=_start_worker_world,
+        initargs=(base_config, addresses if worlds else None),
     ) as pool:
         pending = {pool.submit(_run_job, job, base_config) for job in todo}
         finished = 0
@@ -88,6 +114,25 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
     return len(todo)
 
 
+def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None]:
+    """A progress line on stderr, rewritten after each episode, with the time left at the pace so far."""
+
+    def progress(done: int, total: int, result: dict[str, Any]) -> None:
+        rate = (time.monotonic() - started) / done
+        end = "\n" if done == total else ""
+        sys.stderr.write(f"\r  {done}/{total} episodes, last {result['variant']} {result['id']} "
+                         f"({result['status']}), about {rate * (total - done) / 60:.1f} min left   {end}")
+        sys.stderr.flush()
+
+    return progress
+
+
+def results_for(jobs: list[Job], results_path: Path) -> list[dict[str, Any]]:
+    """The results of exactly these jobs, in the jobs' order (other lines in the file are ignored)."""
+    by_key = {(r["id"], r["variant"]): r for r in read_results(results_path)}
+    return [by_key[job.key] for job in jobs if job.key in by_key]
+
+
 def _repair_torn_tail(path: Path) -> None:
     """Cut a half-written last line left by an interrupted run, so appends start on a new line."""
     if path.exists() and path.stat().st_size:
@@ -99,15 +144,20 @@ def _repair_torn_tail(path: Path) -> None:
 _WORKER: dict[str, Any] = {}
 
 
-def _start_worker_world(config: Config) -> None:
-    """Worker initialiser: one world child process for this worker, stopped when it exits."""
+def _start_worker_world(config: Config, addresses: Any | None) -> None:
+    """Worker initialiser: join the next listed world, or start a world child process for this
+    worker that stops when it exits."""
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)
+    scratch = Path(tempfile.mkdtemp(prefix="homebot-eval-world-"))
+    if addresses is not None:
+        address: WorldAddress = addresses.get(timeout=10)
+        _WORKER.update(namespace=address.namespace, endpoint=address.endpoint, scratch=scratch)
+        return
     namespace = f"homebot/eval-{os.getpid()}"
     endpoint = free_tcp_endpoint()
-    log_dir = Path(tempfile.mkdtemp(prefix="homebot-eval-world-"))
-    world = WorldProcess(namespace, endpoint, config.camera, log_dir / "world.log")
+    world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log")
     atexit.register(world.stop)
-    _WORKER.update(namespace=namespace, endpoint=endpoint, world=world, scratch=log_dir)
+    _WORKER.update(namespace=namespace, endpoint=endpoint, world=world, scratch=scratch)
 
 
 def _run_job(job: Job, base_config: Config) -> dict[str, Any]:

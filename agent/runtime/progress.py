@@ -14,13 +14,13 @@ class StepPrinter:
 
     def __call__(self, data: dict[str, Any]) -> None:
         for behaviour in data["behaviours"]:
-            if behaviour["name"] not in ("QueryVLM", "QueryDirections", "Navigate", "AnswerFallback",
-                                         "NothingLeftToExplore"):
+            if behaviour["name"] not in ("QueryVLM", "UpdatePredictionSet", "QueryDirections", "Navigate",
+                                         "Answer", "AnswerFallback", "NothingLeftToExplore"):
                 continue
             if behaviour["status"] != "SUCCESS" or not behaviour["visited"]:
                 continue
             message = behaviour["message"]
             if self._printed.get(behaviour["name"]) != message:
                 self._printed[behaviour["name"]] = message
-                self.out.write(f"  {behaviour['name']:<15} {message}\n")
+                self.out.write(f"  {behaviour['name']:<19} {message}\n")
                 self.out.flush()

@@ -18,6 +18,8 @@ from agent.bus.rpc import QueryFailed
 from agent.bus.session import free_tcp_endpoint, open_session
 from agent.config import Config
 from agent.eqa.answers import AnswerLog
+from agent.eqa.calibration import CalibrationError, calibration_for
+from agent.eqa.stopping import StopRuleName, StoppingRule, make_rule
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.semantic import method_flags, new_semantic_map
 from agent.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
@@ -75,6 +77,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
     link = WorldLink(session, keys, config.bus.query_timeout_s)
     try:
         vlm = make_vlm(config.vlm)  # a bad model path or backend fails now, before any world starts
+        stopping, result["stop"] = _stopping_rule(config)  # so does a calibration that does not fit
         if request.connect is None:
             world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
             world.wait_ready(link, config.bus.world_start_timeout_s)
@@ -88,9 +91,9 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         reset = link.call("reset", reset_request, timeout_s=config.bus.world_start_timeout_s)
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
-        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, link, session,
-                                                   keys, folder, timer, extra_sinks or [])
-    except (WorldStartError, QueryFailed, KeyError, VLMError) as error:
+        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, stopping, link,
+                                                   session, keys, folder, timer, extra_sinks or [])
+    except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError) as error:
         reason = f"the episode could not start: {error}"
         result.update({"status": "failed", "reason": reason, "correct": False})
         write_json_atomic(folder / "result.json", result)
@@ -112,7 +115,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
 
 
 def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any], config: Config,
-              vlm: VisionLanguageModel,
+              vlm: VisionLanguageModel, stopping: StoppingRule,
               link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
               extra_sinks: list[SnapshotSink]) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
@@ -136,7 +139,7 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
         writer.set(bb.SEMANTIC_MAP, new_semantic_map(initial[bb.MAP].spec, config.explore.method, config.semantic_values))
     parts = EqaTreeParts(link, vlm, config.explore, config.episode.vlm_timeout_s,
                          config.bus.move_timeout_s, timer, config.prompt_points, config.semantic_values,
-                         config.frontier_weights, int(scenario["seed"]), folder / "prompts")
+                         config.frontier_weights, int(scenario["seed"]), folder / "prompts", stopping)
     publisher = session.declare_publisher(keys.agent_tree)
     events = session.declare_publisher(keys.agent_events)
     snapshot_log = SnapshotLog(folder / "snapshots.jsonl")
@@ -155,10 +158,30 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
          "relevance": round(s.relevance, 5)}
         for s in log_of_steps.steps
     ]
+    writer.register_key(bb.PREDICTION_SET, access=py_trees.common.Access.READ)
+    outcome.extra["prediction_set"] = writer.get(bb.PREDICTION_SET)
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
     publisher.undeclare()
     events.undeclare()
     return outcome, writer.get(bb.MAP), writer.get(bb.TRAJECTORY)
+
+
+def _stopping_rule(config: Config) -> tuple[StoppingRule, dict[str, Any]]:
+    """The configured stopping rule and what the run record says about it."""
+    stop = config.stop
+    if stop.rule != StopRuleName.CP:
+        threshold = {StopRuleName.ENTROPY: stop.entropy_threshold,
+                     StopRuleName.RELEVANCE: stop.relevance_threshold}.get(StopRuleName(stop.rule))
+        return make_rule(stop, None, LETTERS), {"rule": stop.rule, "threshold": threshold}
+    calibration, path = calibration_for(config)
+    q_hat = calibration.q_hat(stop.epsilon)
+    if q_hat == float("inf"):
+        log.warning("stop.epsilon %g is below 1/(N+1) for the %d calibration episodes of %s: "
+                    "the conformal set never shrinks, so the robot explores to its budget",
+                    stop.epsilon, len(calibration.episodes), path)
+    record = {"rule": stop.rule, "epsilon": stop.epsilon, "q_hat": q_hat if q_hat != float("inf") else None,
+              "calibration": str(path), "calibration_episodes": len(calibration.episodes)}
+    return make_rule(stop, q_hat, LETTERS), record
 
 
 def _scenario_fields(scenario: dict[str, Any], config: Config) -> dict[str, Any]:
@@ -186,6 +209,7 @@ def _outcome_fields(outcome: EpisodeOutcome, result: dict[str, Any]) -> dict[str
         "answer_detail": answer or None,
         "steps": outcome.extra.get("steps", 0),
         "step_scores": outcome.extra.get("step_scores", []),
+        "prediction_set": outcome.extra.get("prediction_set"),
         "ticks": outcome.ticks,
         "seconds": round(outcome.seconds, 3),
     }
