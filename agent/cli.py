@@ -49,7 +49,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
     run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
     run.add_argument("--method", choices=("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv"),
-                     help="exploration method (default fbe; same as --set explore.method=…)")
+                     help="exploration method (default semantic; same as --set explore.method=…)")
+    run.add_argument("--stop", choices=("cp", "entropy", "relevance", "budget"),
+                     help="stopping rule (default cp: conformal prediction; same as --set stop.rule=…)")
+    run.add_argument("--epsilon", type=float,
+                     help="accepted miscoverage ε of the conformal set (default 0.3; --set stop.epsilon=…)")
     run.set_defaults(handler=_run)
 
     watch = commands.add_parser("watch", help="show a running agent's behaviour tree live")
@@ -81,15 +85,19 @@ def _parser() -> argparse.ArgumentParser:
     evaluate = commands.add_parser("eval", help="evaluate over a suite")
     evaluations = evaluate.add_subparsers(dest="eval", required=True)
     explore = evaluations.add_parser("explore", help="exploration methods: success rate against normalised time")
-    _config_options(explore)
-    explore.add_argument("--suite", type=Path, required=True, help="a suite file (homebot suite make)")
+    _suite_run_options(explore, "runs/eval-explore", "results, curves.csv and curves.png go here; reruns resume")
     explore.add_argument("--methods", default="fbe,semantic,semantic-no-lsv,semantic-no-gsv",
                          help="comma separated (default: all four)")
-    explore.add_argument("--workers", type=int, default=2, help="parallel episodes, each with its own world")
-    explore.add_argument("--limit", type=int, default=None, help="only the first N scenarios")
-    explore.add_argument("--out", type=Path, default=Path("runs/eval-explore"),
-                         help="results, curves.csv and curves.png go here; reruns resume")
     explore.set_defaults(handler=_eval_explore)
+    stop = evaluations.add_parser("stop", help="stopping rules: CP against Entropy and Relevance (Fig. 9)")
+    _suite_run_options(stop, "runs/eval-stop", "episodes, CSVs and stop-curves.png go here; reruns resume")
+    stop.add_argument("--calibration", type=Path, required=True, help="a calibration file (homebot calibrate)")
+    stop.set_defaults(handler=_eval_stop)
+
+    calibrate = commands.add_parser("calibrate", help="calibrate conformal prediction on a suite")
+    _suite_run_options(calibrate, "runs/calibration.json",
+                       "the calibration file; episodes go beside it as .episodes.jsonl; reruns resume")
+    calibrate.set_defaults(handler=_calibrate)
 
     bench = commands.add_parser("bench", help="measure speed")
     benches = bench.add_subparsers(dest="bench", required=True)
@@ -113,6 +121,36 @@ def _config_options(parser: argparse.ArgumentParser) -> None:
                         help="override one setting, e.g. --set vlm.sim.skill=0.6 (repeatable)")
     parser.add_argument("--listen", action="append", metavar="ENDPOINT",
                         help=f"where `homebot watch` can reach this agent (default {DEFAULT_AGENT_ENDPOINT})")
+
+
+def _suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: str) -> None:
+    """Options of the commands that run a suite's episodes to their full budget in workers."""
+    _config_options(parser)
+    parser.add_argument("--suite", type=Path, required=True, help="a suite file (homebot suite make)")
+    parser.add_argument("--workers", type=int, default=2, help="parallel episodes, each with its own world")
+    parser.add_argument("--limit", type=int, default=None, help="only the first N scenarios")
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} (default {out})")
+    parser.add_argument("--worlds", metavar="ENDPOINTS",
+                        help="join running worlds instead of starting one per worker: comma-separated "
+                             "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each)")
+
+
+def _suite_config(args: argparse.Namespace) -> Config | None:
+    """The config of a suite run (workers need no watcher endpoint), or None after a clear message.
+
+    Also checks ``--worlds`` and leaves the parsed addresses in ``args.world_addresses``.
+    """
+    from agent.eval.runner import WorldAddress
+
+    if args.workers < 1:
+        print(f"homebot: --workers must be at least 1, got {args.workers}", file=sys.stderr)
+        return None
+    try:
+        args.world_addresses = [WorldAddress.parse(w) for w in args.worlds.split(",") if w.strip()] if args.worlds else None
+    except ValueError as error:
+        print(f"homebot: --worlds: {error}", file=sys.stderr)
+        return None
+    return load_config(args.config, [*args.set, "bus.listen=[]"])
 
 
 def _load(args: argparse.Namespace) -> Config:
@@ -193,13 +231,13 @@ def _eval_explore(args: argparse.Namespace) -> int:
     from agent.eval.explore import evaluate_explore
     from worlds.suite import SuiteError
 
-    config = load_config(args.config, [*args.set, "bus.listen=[]"])  # workers need no watcher endpoint
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    if args.workers < 1:
-        print("homebot eval explore: --workers must be at least 1", file=sys.stderr)
+    config = _suite_config(args)
+    if config is None:
         return 2
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
-        report = evaluate_explore(args.suite, methods, args.out, args.workers, config, args.limit)
+        report = evaluate_explore(args.suite, methods, args.out, args.workers, config, args.limit,
+                                  args.world_addresses)
     except (ValueError, SuiteError, OSError) as error:
         print(f"homebot eval explore: {error}", file=sys.stderr)
         return 2
@@ -209,6 +247,62 @@ def _eval_explore(args: argparse.Namespace) -> int:
     for method, curve in report["curves"].items():
         print(f"{method:<18} {report['counts'][method]:>4} " + " ".join(f"{100 * curve[i]:>6.1f}%" for i in marks))
     print(f"{report['failed']} failed episodes; results {report['results']}; curves in {args.out}/curves.png and .csv")
+    return 0
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from agent.eqa.calibration import CalibrationError
+    from agent.eval.calibrate import calibrate, episodes_path
+    from worlds.suite import SuiteError
+
+    config = _suite_config(args)
+    if config is None:
+        return 2
+    try:
+        calibration = calibrate(args.suite, args.out, args.workers, config, args.limit, args.world_addresses)
+    except (CalibrationError, SuiteError, OSError) as error:
+        print(f"homebot calibrate: {error}", file=sys.stderr)
+        return 2
+    n = len(calibration.episodes)
+    print(f"{n} calibration episodes ({len(calibration.failed)} failed), policy {config.explore.method}, "
+          f"VLM {config.vlm.backend}")
+    print("  ε      1−ε    q̂")
+    for epsilon in (0.05, 0.1, 0.2, 0.3, 0.4, 0.5):
+        q_hat = calibration.q_hat(epsilon)
+        print(f"  {epsilon:<6g} {1 - epsilon:<6.2f} {q_hat:.4f}" if q_hat != float("inf") else
+              f"  {epsilon:<6g} {1 - epsilon:<6.2f} +inf (needs more than {n} episodes)")
+    print(f"calibration file {args.out}; episodes {episodes_path(args.out)}")
+    return 0
+
+
+def _eval_stop(args: argparse.Namespace) -> int:
+    from agent.eqa.calibration import CalibrationError
+    from agent.eval.stop import evaluate_stop
+    from worlds.suite import SuiteError
+
+    config = _suite_config(args)
+    if config is None:
+        return 2
+    try:
+        report = evaluate_stop(args.suite, args.calibration, args.out, args.workers, config, args.limit,
+                               args.world_addresses)
+    except (CalibrationError, SuiteError, ValueError, OSError) as error:
+        print(f"homebot eval stop: {error}", file=sys.stderr)
+        return 2
+    print(f"{report['n']} test episodes ({report['failed']} failed), calibrated on {report['calibration_n']}")
+    print("normalised steps each rule needs to reach a success rate (— : never reached)")
+    rules = ("cp", "relevance", "entropy")
+    print(f"  {'success':>8} {'of full':>8}" + "".join(f"{rule:>11}" for rule in rules))
+    for row in report["reach"]:
+        cells = "".join(f"{'—' if row[r] is None else format(row[r], '.3f'):>11}" for r in rules)
+        print(f"  {row['success']:>8.1%} {row['share_of_full_budget_success']:>8.0%}{cells}")
+    print("coverage of the conformal set at the end of the budget")
+    print(f"  {'ε':<6}{'1−ε':>6}{'q̂':>8}{'coverage':>10}{'± s.e.':>8}{'|C|':>6}")
+    for row in report["coverage"]:
+        q_hat = "inf" if row["q_hat"] == float("inf") else f"{row['q_hat']:.3f}"
+        print(f"  {row['epsilon']:<6g}{row['promised']:>6.2f}{q_hat:>8}{row['coverage']:>10.3f}"
+              f"{row['standard_error']:>8.3f}{row['mean_set_size']:>6.2f}")
+    print(f"figures in {args.out}/stop-curves.png, stop-curves.csv, coverage.csv, steps-to-reach.csv")
     return 0
 
 

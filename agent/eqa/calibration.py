@@ -31,10 +31,12 @@ class CalibrationError(ValueError):
 
 
 def made_with(config: Config) -> dict[str, Any]:
-    """What the scores depend on: the exploration policy, the map, the camera, the VLM and the budget.
+    """What the scores depend on: the exploration policy, the map, the camera and the VLM.
 
     Settings that change how but not what the VLM answers (a server's URL, timeouts, retries) are
-    left out, so moving a server does not invalidate a calibration.
+    left out, so moving a server does not invalidate a calibration. So is the step budget: a robot
+    with fewer steps than the calibration episodes had keeps the guarantee (its set can only be
+    larger), which docs/stopping.md spells out.
     """
     vlm: dict[str, Any] = {"backend": config.vlm.backend}
     if config.vlm.backend == "sim":
@@ -50,7 +52,6 @@ def made_with(config: Config) -> dict[str, Any]:
         "prompt_points": dataclasses.asdict(config.prompt_points),
         "map": dataclasses.asdict(config.map),
         "camera": dataclasses.asdict(config.camera),
-        "budget": config.episode.budget,
         "vlm": vlm,
     })
 
