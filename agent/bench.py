@@ -7,7 +7,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from agent.config import Config
+from agent.config import Config, load_config
 from agent.runtime.run import RunRequest, run_episode
 from agent.runtime.timing import StageTimer
 from worlds.home import generate_home
@@ -17,7 +17,11 @@ STAGES = ("render", "transport", "tsdf", "planning", "vlm", "tick")
 
 
 def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[str, Any]:
-    """Run one fixed episode (the seed's home, or one of ``area_m2``) with per-stage timing."""
+    """Run one fixed episode (the seed's home, or one of ``area_m2``) with per-stage timing.
+
+    The episode explores to its budget whatever the stopping rule, so runs compare the same steps.
+    """
+    config = load_config(overrides=["stop.rule=budget"], base=config)
     timer = StageTimer()
     home = generate_home(seed, area_m2=area_m2)
     with tempfile.TemporaryDirectory(prefix="homebot-bench-") as scratch:
