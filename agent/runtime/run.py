@@ -163,7 +163,11 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
     publisher.undeclare()
     events.undeclare()
-    return outcome, writer.get(bb.MAP), writer.get(bb.TRAJECTORY)
+    world_map, trajectory = writer.get(bb.MAP), writer.get(bb.TRAJECTORY)
+    # The blackboard is global: clearing it frees this episode's TSDF now rather than at
+    # interpreter exit, where open3d reports any device memory still held as a leak and fails.
+    py_trees.blackboard.Blackboard.clear()
+    return outcome, world_map, trajectory
 
 
 def _stopping_rule(config: Config) -> tuple[StoppingRule, dict[str, Any]]:
