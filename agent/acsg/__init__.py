@@ -1,0 +1,48 @@
+"""Action-conditioned scene graphs and interactive exploration (RoboEXP), as a pure library.
+
+- `graph`: the ACSG (object and action nodes, four edge kinds, kept acyclic), JSON, ground truth;
+- `plan`: object retrieval, the actions on the paths from the roots in topological order;
+- `draw`: a layered picture of a graph;
+- `interfaces`: Perception, DecisionModule and SkillExecutor, and what crosses them;
+- `explore`: Algorithm 1 with the action stack and Algorithm 3's preconditions;
+- `decision`: the commonsense rule module and the VLM prompt module (proposer and verifier);
+- `symbolic`: a symbolic tabletop to explore without a simulator;
+- `metrics`: Table I (success, object and state recovery, unexplored space, graph edit distance);
+- `cli`: ``homebot acsg plan`` and ``show``.
+
+No simulator, bus or behaviour tree is imported here; networkx (metrics) and matplotlib (draw)
+are imported only when used.
+"""
+
+from agent.acsg.decision import PromptDecisionModule, RuleDecisionModule
+from agent.acsg.explore import ExplorationResult, ExploreConfig, Explorer, LogEntry, explore
+from agent.acsg.graph import (
+    ACSG,
+    ACSGError,
+    ActionNode,
+    CycleError,
+    Edge,
+    ObjectNode,
+    UnknownObjectError,
+    from_ground_truth,
+    load_acsg,
+)
+from agent.acsg.interfaces import (
+    DecisionContext,
+    DecisionModule,
+    Detection,
+    Perception,
+    SkillCall,
+    SkillExecutor,
+    SkillResult,
+)
+from agent.acsg.plan import retrieval_actions, retrieval_plan
+from agent.acsg.symbolic import SymbolicScene, Thing
+
+__all__ = [
+    "ACSG", "ACSGError", "ActionNode", "CycleError", "DecisionContext", "DecisionModule", "Detection", "Edge",
+    "ExplorationResult", "ExploreConfig", "Explorer", "LogEntry", "ObjectNode", "Perception",
+    "PromptDecisionModule", "RuleDecisionModule", "SkillCall", "SkillExecutor", "SkillResult", "SymbolicScene",
+    "Thing", "UnknownObjectError", "explore", "from_ground_truth", "load_acsg", "retrieval_actions",
+    "retrieval_plan",
+]

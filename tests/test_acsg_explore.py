@@ -1,0 +1,276 @@
+"""Interactive exploration: the order the action stack gives, obstruction handling, the decision
+modules, and exploring every ground-truth tabletop scene back to its start state."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pytest
+
+from agent.acsg.decision import PROPOSER_USER, VERIFIER_USER, PromptDecisionModule, RuleDecisionModule
+from agent.acsg.explore import ExploreConfig, explore
+from agent.acsg.graph import ActionNode, ObjectNode, from_ground_truth
+from agent.acsg.interfaces import DecisionContext, SkillCall, SkillResult
+from agent.acsg.metrics import aligned_edit_distance, episode_metrics, position_recovery
+from agent.acsg.plan import retrieval_plan
+from agent.acsg.symbolic import SymbolicScene, Thing
+from agent.vlm.protocol import VisualQuery
+
+
+@dataclass
+class Recorder:
+    """Wraps the rule module and the scene so every judgement and primitive lands in one list."""
+
+    scene: SymbolicScene
+    decision: object = field(default_factory=RuleDecisionModule)
+    events: list[str] = field(default_factory=list)
+
+    def observe(self):
+        return self.scene.observe()
+
+    def propose(self, obj: ObjectNode, context: DecisionContext):
+        self.events.append(f"propose {obj.id}")
+        return self.decision.propose(obj, context)
+
+    def verify(self, action: ActionNode, context: DecisionContext) -> list[str]:
+        blockers = self.decision.verify(action, context)
+        self.events.append(f"verify {action.id} -> {blockers}")
+        return blockers
+
+    def execute(self, call: SkillCall) -> SkillResult:
+        result = self.scene.execute(call)
+        self.events.append(f"{call.primitive} {call.target}" + ("" if result.ok else " FAILED"))
+        return result
+
+    def run(self, **config):
+        return explore(self, self, self, ExploreConfig(**config) if config else None)
+
+
+def matryoshka() -> SymbolicScene:
+    return SymbolicScene([
+        Thing("1", "table"),
+        Thing("2", "box", "1", "on", (0.0, 0.0, 0.8), pickable=True),
+        Thing("3", "box", "2", "inside", (0.0, 0.0, 0.78), hidden_by=("2",), pickable=True),
+        Thing("4", "doll", "3", "inside", (0.0, 0.0, 0.77), hidden_by=("2", "3"), pickable=True),
+    ])
+
+
+def cabinet_behind_bottle(jar: str | None = None) -> SymbolicScene:
+    """A bottle in the door's swing, an apple inside; ``jar`` "blocking" or "aside" adds a jar."""
+    things = [
+        Thing("1", "table"),
+        Thing("2", "cabinet", "1", "on", (0.0, 0.2, 0.75)),
+        Thing("3", "door", "2", "belongs", part="door"),
+        Thing("4", "handle", "3", "belongs"),
+        Thing("6", "apple", "2", "inside", (0.0, 0.2, 0.8), hidden_by=("3",), pickable=True),
+        Thing("5", "bottle", "1", "on", (0.1, -0.1, 0.85), blocks=("3",), pickable=True),
+    ]
+    if jar is not None:
+        blocks = ("3",) if jar == "blocking" else ()
+        things.append(Thing("7", "jar", "1", "on", (0.2, -0.1, 0.8), blocks=blocks, pickable=True))
+    return SymbolicScene(things)
+
+
+# ---- the stack order ---------------------------------------------------------------------------
+
+def test_matryoshka_is_explored_depth_first_and_put_back() -> None:
+    run = Recorder(matryoshka())
+    result = run.run()
+    assert result.steps() == ["pick_away o2", "pick_away o3", "pick_back o3", "pick_back o2"]
+    judged = [e for e in run.events if not e.startswith("verify")]
+    assert judged == ["propose o1", "propose o2", "pick_away o2", "propose o3", "pick_away o3", "propose o4",
+                      "pick_back o3", "pick_back o2"]
+    assert [e.revealed for e in result.log] == [("o3",), ("o4",), (), ()]
+    g = result.graph
+    assert g.edge("pick:2", "o3").relation == "reveals" and g.edge("pick:3", "o4").relation == "reveals"
+    assert g.parent("o4") == ("o3", "inside")
+    assert result.unexplored == frozenset() and result.returned_to_start and not result.truncated
+    assert retrieval_plan(g, "doll") == ["pick away box (o2)", "pick away box (o3)", "pick doll (o4)"]
+    assert position_recovery(run.scene.start_positions(), run.scene.positions(), tolerance_m=1e-9) == 1.0
+
+
+def test_obstruction_moves_the_bottle_until_the_door_is_shut_again() -> None:
+    run = Recorder(cabinet_behind_bottle())
+    result = run.run()
+    assert result.steps() == ["pick_away o5", "open_door o3", "close_door o3", "pick_back o5"]
+    assert run.events[run.events.index("verify open:3 -> ['o5']"):] == [
+        "verify open:3 -> ['o5']", "verify pick:5 -> []", "pick_away o5", "open_door o3", "propose o6",
+        "close_door o3", "pick_back o5",
+    ]
+    g = result.graph
+    assert g.edge("pick:5", "open:3").relation == "precondition"
+    assert g.edge("open:3", "o6").relation == "reveals"
+    assert g.action("open:3").params == {"handle": "o4"}
+    assert retrieval_plan(g, "apple") == ["pick away bottle (o5)", "open door (o3)", "pick apple (o6)"]
+    assert result.returned_to_start and result.unexplored == frozenset()
+    assert run.scene.part_states() == run.scene.start_part_states()
+
+
+def test_two_blockers_are_put_back_in_reverse() -> None:
+    result = Recorder(cabinet_behind_bottle(jar="blocking")).run()
+    assert result.steps() == ["pick_away o5", "pick_away o7", "open_door o3", "close_door o3", "pick_back o7",
+                              "pick_back o5"]
+    assert result.graph.predecessors("open:3", "action-action") == ["pick:5", "pick:7"]
+
+
+def test_a_box_in_a_drawer_is_lifted_and_put_back_before_the_drawer_closes() -> None:
+    scene = SymbolicScene([
+        Thing("1", "table"),
+        Thing("2", "drawer chest", "1", "on"),
+        Thing("3", "drawer", "2", "belongs", part="drawer"),
+        Thing("4", "drawer", "2", "belongs", part="drawer"),
+        Thing("5", "box", "3", "inside", hidden_by=("3",), pickable=True),
+        Thing("6", "soap", "5", "inside", hidden_by=("3", "5"), pickable=True),
+        Thing("7", "cup", "4", "inside", hidden_by=("4",), pickable=True),
+    ])
+    result = Recorder(scene).run()
+    assert result.steps() == ["open_drawer o3", "pick_away o5", "pick_back o5", "close_drawer o3",
+                              "open_drawer o4", "close_drawer o4"]
+    assert retrieval_plan(result.graph, "soap") == ["open drawer (o3)", "pick away box (o5)", "pick soap (o6)"]
+
+
+def test_without_the_verifier_the_blocked_door_fails_and_nothing_needs_undoing() -> None:
+    class Blind(RuleDecisionModule):
+        def verify(self, action, context):
+            return []
+
+    scene = cabinet_behind_bottle()
+    result = Recorder(scene, Blind()).run()
+    assert result.steps() == ["open_door o3"]
+    assert not result.log[0].ok and "blocked by bottle 5" in result.log[0].reason
+    assert result.graph.action("open:3").state == "failed"
+    assert result.unexplored == frozenset({"open:3"})
+    assert "o6" not in result.graph  # the apple was never seen
+    assert result.returned_to_start
+
+
+def test_the_symbolic_scene_refuses_the_wrong_order() -> None:
+    """Putting the bottle back before closing would leave the door unable to close."""
+    scene = cabinet_behind_bottle()
+
+    def call(primitive: str, instance: str) -> SkillResult:
+        return scene.execute(SkillCall(primitive, "x", f"o{instance}", instance))
+
+    assert not call("open_door", "3").ok
+    assert call("pick_away", "5").ok and call("open_door", "3").ok and call("pick_back", "5").ok
+    closing = call("close_door", "3")
+    assert not closing.ok and "blocked" in closing.reason
+    assert not call("pick_away", "3").ok  # a door is not picked
+    assert not call("open_drawer", "3").ok  # nor opened as a drawer
+
+
+def test_rewards_follow_the_paper() -> None:
+    result = Recorder(cabinet_behind_bottle()).run(reward_lambda=0.25)
+    # pick_away: no new node, U loses pick:5 -> 1 - λ; open: the apple is new (+1), U gains the apple
+    # and loses open:3 (ΔU = 0) -> 1 - λ; the undos change nothing -> -λ.
+    assert [e.reward for e in result.log] == pytest.approx([0.75, 0.75, -0.25, -0.25])
+    assert result.total_reward == pytest.approx(1.0)
+
+
+def test_truncation_and_bad_proposals() -> None:
+    result = Recorder(matryoshka()).run(max_steps=2)
+    assert result.truncated and not result.returned_to_start and len(result.log) == 2
+
+    class Wrong(RuleDecisionModule):
+        def propose(self, obj, context):
+            return "smash"
+
+    with pytest.raises(ValueError, match="proposal for o1: 'smash'"):
+        Recorder(matryoshka(), Wrong()).run()
+
+
+# ---- the prompt module with a fake VLM ------------------------------------------------------------
+
+class FakeVLM:
+    """Answers the proposer by the query object's label, the verifier Yes for bottles only."""
+
+    name = "fake"
+
+    def __init__(self) -> None:
+        self.queries: list[VisualQuery] = []
+
+    def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        self.queries.append(query)
+        if query.candidates == ("1", "2", "3"):
+            label = query.prompt.split("Query object: ")[1].split(".")[0].split()[-1]
+            skill = {"cabinet": "1", "box": "2"}.get(label, "3")
+            return {c: 0.8 if c == skill else 0.1 for c in query.candidates}
+        assert query.candidates == ("Yes", "No")
+        yes = 0.9 if "Could the bottle block" in query.prompt else 0.2
+        return {"Yes": yes, "No": 1 - yes}
+
+
+def test_prompt_module_asks_the_vlm_with_the_papers_prompts() -> None:
+    vlm = FakeVLM()
+    frames = []
+
+    def camera():
+        frames.append(object())
+        return frames[-1]
+
+    decision = PromptDecisionModule(vlm, camera=camera)
+    scene = cabinet_behind_bottle(jar="aside")
+    result = Recorder(scene, decision).run()
+    assert result.steps() == ["pick_away o5", "open_door o3", "close_door o3", "pick_back o5"]
+    proposer = [q for q in vlm.queries if q.candidates == ("1", "2", "3")]
+    verifier = [q for q in vlm.queries if q.candidates == ("Yes", "No")]
+    assert len(proposer) == 5  # table, cabinet, bottle, jar, apple: parts are judged through the cabinet
+    assert all(PROPOSER_USER in q.prompt for q in proposer)
+    assert len(verifier) == 2 and all(VERIFIER_USER in q.prompt for q in verifier)
+    assert "Given object list [bottle, jar]" in verifier[0].prompt
+    assert [q.observation for q in vlm.queries] == frames  # a fresh frame with every query
+    assert decision.queries == vlm.queries
+
+
+def test_prompt_module_rejects_a_model_that_skips_a_candidate() -> None:
+    class Mute:
+        name = "mute"
+
+        def probabilities(self, query):
+            return {"1": 1.0}
+
+    with pytest.raises(ValueError, match="no probability for candidates"):
+        Recorder(matryoshka(), PromptDecisionModule(Mute())).run()
+
+
+def test_rule_module_judges_by_commonsense() -> None:
+    from agent.acsg.graph import ACSG
+
+    g = ACSG()
+    context = DecisionContext(g, {})
+    rule = RuleDecisionModule()
+    judged = {label: rule.propose(g.add_object(f"o{i}", label, attributes=attrs), context)
+              for i, (label, attrs) in enumerate([("cabinet", {}), ("fridge", {}), ("box", {}), ("lid", {}),
+                                                  ("apple", {}), ("bowl", {}), ("cup", {"upside_down": True})])}
+    assert judged == {"cabinet": "open", "fridge": "open", "box": "pick", "lid": "pick", "apple": "none",
+                      "bowl": "none", "cup": "pick"}
+    g.add_object("t", "table")
+    g.add_object("d", "door")
+    g.add_edge("t", "d", relation="belongs")
+    assert rule.propose(g.object("t"), context) == "open"  # anything with a door opens
+
+
+# ---- every ground-truth scene ----------------------------------------------------------------------
+
+def test_exploring_every_tabletop_scene_recovers_its_ground_truth() -> None:
+    from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
+
+    wrong, moved = [], []
+    for task in TASKS:
+        for seed in range(VARIANTS):
+            scene = tabletop_variant(task, seed)
+            world = SymbolicScene.from_tabletop(scene)
+            result = explore(world, RuleDecisionModule(), world)
+            truth = from_ground_truth(scene.ground_truth_acsg())
+            metrics = episode_metrics(result.graph, truth, world.start_positions(), world.positions(),
+                                      world.start_part_states(), world.part_states(), timeout_s=5.0)
+            if not metrics.success or metrics.graph_edit_distance != 0 or metrics.unexplored_space != 0:
+                wrong.append((task, seed, aligned_edit_distance(result.graph, truth), metrics))
+            if not (metrics.state_recovered and result.returned_to_start) or result.unexplored or result.notes:
+                moved.append((task, seed, result.notes, sorted(result.unexplored)))
+            assert all(entry.ok for entry in result.log), (task, seed, [e.describe() for e in result.log])
+            if task == "occlusion":
+                assert truth.edges("action-action"), (task, seed)
+                assert set(map(str, truth.edges("action-action"))) == set(map(str, result.graph.edges("action-action")))
+    assert not moved, moved
+    assert len(wrong) <= 2, wrong  # in fact none today; a few would still be "most"
