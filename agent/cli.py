@@ -24,6 +24,10 @@ def main(argv: list[str] | None = None) -> int:
         from worlds.scene_cli import main as scene_main
 
         return scene_main(argv[1:])
+    if argv[:1] == ["acsg"]:
+        from agent.acsg.cli import main as acsg_main
+
+        return acsg_main(argv[1:])
     parser = _parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
@@ -41,6 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     commands.add_parser("world", help="serve a simulated home over Zenoh (see `homebot world --help`)")
     commands.add_parser("scene", help="make, draw and check scene specs (see `homebot scene --help`)")
+    commands.add_parser("acsg", help="retrieval plans and pictures of scene graphs (see `homebot acsg --help`)")
 
     run = commands.add_parser("run", help="run one EQA episode against a simulated home")
     _config_options(run)
