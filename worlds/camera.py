@@ -1,4 +1,4 @@
-"""Rendering one RGB-D frame with instance segmentation from the robot's head camera.
+"""Rendering one RGB-D frame with instance segmentation from the robot's head or wrist camera.
 
 PyBullet's depth buffer is non-linear; it is turned into metres along the optical axis with
 z = far·near / (far − (far − near)·d), and pixels at the far plane (nothing hit) become 0, meaning
@@ -63,7 +63,12 @@ def render(
     labels: SegLabels,
 ) -> Frame:
     """Render what the head camera sees from ``base_pose``; labels only for instances in the frame."""
-    pose = camera_pose(base_pose, camera)
+    return render_at(client, camera, camera_pose(base_pose, camera), labels)
+
+
+def render_at(client: int, camera: CameraConfig, pose: np.ndarray, labels: SegLabels) -> Frame:
+    """Render what a camera with ``camera``'s intrinsics sees from ``pose`` (4x4 camera-to-world,
+    OpenCV axes): the head camera, or the wrist camera wherever the arm has put it."""
     view, projection = _matrices(camera, pose)
     started = time.perf_counter()
     _, _, rgba, depth_buffer, body_seg = p.getCameraImage(

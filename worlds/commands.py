@@ -11,17 +11,28 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+import numpy as np
+
 from agent.bus.rpc import RequestError
 from worlds.home import ROOM_COUNT, HomeSpec
+from worlds.robot_arm import CAMERAS, ArmSpec
 from worlds.scenario import Scenario
 from worlds.spec import load_spec
 from worlds.spec_fields import SpecError
+from worlds.tabletop import TASKS
 from worlds.vocabulary import LETTERS
 
 MAX_WAYPOINTS = 500
 #: Waypoints further than this from the origin are certainly a mistake (homes are ~10 m across).
 MAX_COORDINATE_M = 1000.0
 MAX_SEED = 2**63 - 1
+#: Trajectory sampling periods allowed, in seconds, and the longest trajectory one query may run.
+DT_RANGE = (0.001, 1.0)
+MAX_TRAJECTORY_S = 120.0
+MAX_SAMPLES = 20_000
+#: Slack on the velocity limit between consecutive samples (rounding in the sampler, not speeding).
+VELOCITY_SLACK = 1.05
+GRIPPER_ACTIONS = ("open", "close")
 
 
 def _only(meta: dict[str, Any], verb: str, allowed: tuple[str, ...]) -> None:
@@ -41,17 +52,20 @@ def _is_number(value: Any) -> bool:
 
 @dataclass(frozen=True)
 class ResetRequest:
-    """What to build: the home of ``seed`` or the given ``scene``, and its scenario or the given one."""
+    """What to build: the home of ``seed`` or the given ``scene``, and its scenario or the given one;
+    or, with ``tabletop`` (a task of `worlds.tabletop.TASKS`), that task's variant ``seed``."""
 
     seed: int
     n_rooms: int | None
     home: HomeSpec | None
     scenario: Scenario | None
+    tabletop: str | None = None
 
 
 def parse_reset(meta: dict[str, Any]) -> ResetRequest:
-    """From ``{"seed": int >= 0, "n_rooms": optional int, "scene": optional spec, "scenario": optional}``."""
-    _only(meta, "reset", ("seed", "n_rooms", "scene", "scenario"))
+    """From ``{"seed": int >= 0, "n_rooms": optional int, "scene": optional spec, "scenario": optional}``
+    or ``{"seed": int >= 0, "tabletop": task}``."""
+    _only(meta, "reset", ("seed", "n_rooms", "scene", "scenario", "tabletop"))
     if "seed" not in meta:
         raise RequestError("reset.seed: missing (an integer >= 0 is required)")
     seed = meta["seed"]
@@ -72,7 +86,14 @@ def parse_reset(meta: dict[str, Any]) -> ResetRequest:
         except SpecError as error:
             raise RequestError("; ".join(f"reset.scene.{line}" for line in error.errors)) from None
     scenario = _parse_scenario(meta["scenario"]) if meta.get("scenario") is not None else None
-    return ResetRequest(seed, n_rooms, home, scenario)
+    tabletop = meta.get("tabletop")
+    if tabletop is not None:
+        if tabletop not in TASKS:
+            raise RequestError(f"reset.tabletop: {tabletop!r:.80} is not one of {', '.join(TASKS)}")
+        home_fields = [name for name in ("n_rooms", "scene", "scenario") if meta.get(name) is not None]
+        if home_fields:
+            raise RequestError(f"reset.tabletop: cannot be combined with {home_fields[0]} (that is for homes)")
+    return ResetRequest(seed, n_rooms, home, scenario, tabletop)
 
 
 def _parse_scenario(data: Any) -> Scenario:
@@ -103,8 +124,13 @@ def _parse_scenario(data: Any) -> Scenario:
     return Scenario.from_dict(data)
 
 
-def parse_observe(meta: dict[str, Any]) -> None:
-    _only(meta, "observe", ())
+def parse_observe(meta: dict[str, Any]) -> str:
+    """The camera to render, from ``{"camera": "head" (default) | "wrist"}``."""
+    _only(meta, "observe", ("camera",))
+    camera = meta.get("camera", "head")
+    if camera not in CAMERAS:
+        raise RequestError(f"observe.camera: {camera!r:.80} is not one of {', '.join(CAMERAS)}")
+    return camera
 
 
 def parse_description(meta: dict[str, Any]) -> None:
@@ -132,3 +158,80 @@ def parse_move_base(meta: dict[str, Any]) -> tuple[list[tuple[float, float]], fl
     if yaw is not None and not _is_number(yaw):
         raise RequestError(f"move_base.yaw: expected a finite number of radians or null, got {yaw!r:.80}")
     return waypoints, None if yaw is None else float(yaw)
+
+
+def parse_arm_state(meta: dict[str, Any]) -> None:
+    _only(meta, "arm_state", ())
+
+
+def parse_gripper(meta: dict[str, Any]) -> bool:
+    """Whether to close the gripper, from ``{"action": "open" | "close"}``."""
+    _only(meta, "gripper", ("action",))
+    action = meta.get("action")
+    if action is None:
+        raise RequestError("gripper.action: missing (\"open\" or \"close\" is required)")
+    if action not in GRIPPER_ACTIONS:
+        raise RequestError(f"gripper.action: {action!r:.80} is not one of {', '.join(GRIPPER_ACTIONS)}")
+    return action == "close"
+
+
+@dataclass(frozen=True)
+class TrajectoryRequest:
+    """Joint samples (N, joints) in `ArmSpec` order, one every ``dt`` seconds."""
+
+    samples: np.ndarray
+    dt: float
+    stop_on_contact: bool
+
+
+def parse_arm_trajectory(meta: dict[str, Any], arrays: dict[str, np.ndarray], arm: ArmSpec) -> TrajectoryRequest:
+    """From ``{"dt": seconds, "stop_on_contact": optional bool}`` and the float array ``samples`` (N, joints).
+
+    Every sample must be finite and within the joints' position limits, and no joint may move faster
+    than its velocity limit between consecutive samples. Where the first sample may start is the
+    world's to check: it depends on where the arm is.
+    """
+    where = "arm_trajectory"
+    _only(meta, where, ("dt", "stop_on_contact"))
+    unknown = sorted(set(arrays) - {"samples"})
+    if unknown:
+        raise RequestError(f"{where}.arrays.{unknown[0]}: unknown array (expected only samples)")
+    dt = meta.get("dt")
+    if dt is None:
+        raise RequestError(f"{where}.dt: missing (the sampling period in seconds is required)")
+    if not _is_number(dt) or not DT_RANGE[0] <= dt <= DT_RANGE[1]:
+        raise RequestError(f"{where}.dt: {dt!r:.80} must be a number of seconds in [{DT_RANGE[0]:g}, {DT_RANGE[1]:g}]")
+    stop = meta.get("stop_on_contact", False)
+    if not isinstance(stop, bool):
+        raise RequestError(f"{where}.stop_on_contact: expected true or false, got {stop!r:.80}")
+    if "samples" not in arrays:
+        raise RequestError(f"{where}.samples: missing (a float array of shape (N, {len(arm.joints)}) is required)")
+    samples = arrays["samples"]
+    if samples.dtype.kind != "f":
+        raise RequestError(f"{where}.samples: dtype {samples.dtype.name} is not a float type (float32 or float64)")
+    if samples.ndim != 2 or samples.shape[1] != len(arm.joints):
+        raise RequestError(f"{where}.samples: shape {list(samples.shape)} is not (N, {len(arm.joints)}): one column "
+                           f"per joint of {', '.join(arm.names)}")
+    count = samples.shape[0]
+    if not 1 <= count <= MAX_SAMPLES or count * dt > MAX_TRAJECTORY_S:
+        raise RequestError(f"{where}.samples: {count} samples of {dt:g} s; expected 1..{MAX_SAMPLES} samples "
+                           f"lasting at most {MAX_TRAJECTORY_S:g} s")
+    samples = samples.astype(np.float64)
+    bad = np.argwhere(~np.isfinite(samples))
+    if len(bad):
+        row, column = bad[0]
+        raise RequestError(f"{where}.samples[{row}][{column}]: {samples[row, column]} is not finite")
+    lower, upper = arm.column("lower"), arm.column("upper")
+    bad = np.argwhere((samples < lower) | (samples > upper))
+    if len(bad):
+        row, column = bad[0]
+        raise RequestError(f"{where}.samples[{row}][{column}]: {samples[row, column]:.4f} is outside "
+                           f"{arm.names[column]}'s limits [{lower[column]:g}, {upper[column]:g}]")
+    step = np.abs(np.diff(samples, axis=0))
+    fastest = arm.column("velocity") * dt * VELOCITY_SLACK
+    bad = np.argwhere(step > fastest)
+    if len(bad):
+        row, column = bad[0]
+        raise RequestError(f"{where}.samples[{row + 1}][{column}]: moves {step[row, column]:.4f} in {dt:g} s, faster "
+                           f"than {arm.names[column]}'s {arm.joints[column].velocity:g} per second")
+    return TrajectoryRequest(samples, float(dt), stop)

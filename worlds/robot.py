@@ -19,6 +19,14 @@ import numpy as np
 
 ROBOT_RADIUS = 0.25
 ROBOT_HEIGHT = 1.4
+#: The base's mass. The simulator moves the base by teleporting it, so its inertial sits at the link's
+#: origin: PyBullet takes a base's inertial frame for the body's frame, which thus stays base_link's.
+BASE_MASS = 40.0
+#: A light inertial for frames without a body (cameras, the TCP); without one PyBullet assumes 1 kg.
+FRAME_INERTIAL = (
+    '<inertial><origin xyz="0 0 0"/><mass value="0.01"/>'
+    '<inertia ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"/></inertial>'
+)
 
 
 @dataclass(frozen=True)
@@ -110,8 +118,13 @@ def camera_pose(base_pose: tuple[float, float, float], camera: CameraConfig) -> 
     return pose
 
 
-def robot_urdf(camera: CameraConfig) -> str:
-    """The robot description: a cylinder base, the head camera link and its optical frame."""
+def robot_urdf(camera: CameraConfig, arm: str = "") -> str:
+    """The robot description: a cylinder base, the head camera link and its optical frame.
+
+    ``arm`` is more URDF (links and joints hanging off ``base_link``) put in after the head camera;
+    `worlds.robot_arm.homebot_urdf` passes the lift, the Panda and its wrist camera here, so the
+    base and head camera read the same with the arm as without it.
+    """
     body = (
         f'<origin xyz="0 0 {ROBOT_HEIGHT / 2}"/>'
         f'<geometry><cylinder radius="{ROBOT_RADIUS}" length="{ROBOT_HEIGHT}"/></geometry>'
@@ -119,21 +132,29 @@ def robot_urdf(camera: CameraConfig) -> str:
     return f"""<?xml version="1.0"?>
 <robot name="homebot">
   <link name="base_link">
+    <inertial><origin xyz="0 0 0"/><mass value="{BASE_MASS:g}"/>{_inertia(BASE_MASS)}</inertial>
     <visual>{body}</visual>
     <collision>{body}</collision>
   </link>
-  <link name="head_camera_link"/>
+  <link name="head_camera_link">{FRAME_INERTIAL}</link>
   <joint name="head_camera_joint" type="fixed">
     <parent link="base_link"/><child link="head_camera_link"/>
     <origin xyz="0 0 {camera.mount_height_m}" rpy="0 {-math.radians(camera.pitch_deg):.6f} 0"/>
   </joint>
-  <link name="head_camera_optical_frame"/>
+  <link name="head_camera_optical_frame">{FRAME_INERTIAL}</link>
   <joint name="head_camera_optical_joint" type="fixed">
     <parent link="head_camera_link"/><child link="head_camera_optical_frame"/>
     <origin xyz="0 0 0" rpy="{-math.pi / 2:.6f} 0 {-math.pi / 2:.6f}"/>
   </joint>
-</robot>
+{arm}</robot>
 """
+
+
+def _inertia(mass: float) -> str:
+    """A solid cylinder's inertia the size of the base, about its axis and across it."""
+    across = mass * (3 * ROBOT_RADIUS**2 + ROBOT_HEIGHT**2) / 12
+    about = mass * ROBOT_RADIUS**2 / 2
+    return f'<inertia ixx="{across:.4f}" ixy="0" ixz="0" iyy="{across:.4f}" iyz="0" izz="{about:.4f}"/>'
 
 
 def description(camera: CameraConfig) -> dict[str, Any]:

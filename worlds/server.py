@@ -3,10 +3,14 @@
 Queryables (all under ``<ns>``, see `agent.bus.keys`):
 
 - ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 4..10} -> scenario, home outline, pose
-- ``world/cmd/observe``    {} -> pose, camera, labels + arrays rgb (H,W,3 uint8), depth (H,W float32
-                           metres, 0 = no return), seg (H,W int32 instance ids, -1 = nothing)
+                           ({"seed", "tabletop": task} -> a tabletop exploration scene instead)
+- ``world/cmd/observe``    {"camera": "head" | "wrist"} -> pose, camera, labels + arrays rgb (H,W,3
+                           uint8), depth (H,W float32 metres, 0 = no return), seg (H,W int32 ids, -1 = nothing)
 - ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact
-- ``world/robot/description`` {} -> robot size, camera, URDF
+- ``world/cmd/arm_state``  {} -> joint positions, TCP pose, gripper width, what it holds
+- ``world/cmd/arm_trajectory`` {"dt", "stop_on_contact"} + array samples (N, 8) -> reached, errors, contacts
+- ``world/cmd/gripper``    {"action": "open" | "close"} -> what it holds
+- ``world/robot/description`` {} -> robot size, cameras, URDF, arm joints and limits
 
 and the liveliness token ``world/alive`` while serving. PyBullet lives in the serving thread: the
 `World` is created, used and closed there, and `CommandServer` runs every handler in that thread.
@@ -30,9 +34,12 @@ from agent.bus.rpc import Arrays, CommandServer, RequestError
 from agent.bus.session import EndpointError, open_session
 from worlds import commands
 from worlds.home import generate_home
-from worlds.robot import CameraConfig, description
+from worlds.robot import CameraConfig
+from worlds.robot_arm import arm_spec, robot_description
 from worlds.scenario import make_scenario
-from worlds.sim import World
+from worlds.sim import ArmState, World
+from worlds.tabletop import tabletop_variant
+from worlds.tabletop_scene import TABLE_HEIGHT
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +69,9 @@ class WorldServer:
             server.add(self.keys.world_cmd("reset"), self._reset)
             server.add(self.keys.world_cmd("observe"), self._observe)
             server.add(self.keys.world_cmd("move_base"), self._move_base)
+            server.add(self.keys.world_cmd("arm_state"), self._arm_state)
+            server.add(self.keys.world_cmd("arm_trajectory"), self._arm_trajectory)
+            server.add(self.keys.world_cmd("gripper"), self._gripper)
             server.add(self.keys.world_description, self._description)
             token = self.session.liveliness().declare_token(self.keys.world_alive)
             self.ready.set()
@@ -77,13 +87,19 @@ class WorldServer:
 
     def _built(self, verb: str) -> World:
         assert self._world is not None  # handlers only run inside serve()
-        if self._world.home is None:
+        if not self._world.ready:
             raise RequestError(f"{verb}: no home yet; send reset first")
         return self._world
 
     def _reset(self, request: Message) -> tuple[dict[str, Any], Arrays]:
         wanted = commands.parse_reset(request.meta)
         assert self._world is not None
+        if wanted.tabletop is not None:
+            scene = tabletop_variant(wanted.tabletop, wanted.seed)
+            base_pose = self._world.start_tabletop(scene)
+            table = {"size": list(scene.table_size), "height": TABLE_HEIGHT, "colour": scene.table_colour}
+            tabletop = {"task": scene.task, "seed": scene.seed, "table": table}
+            return {"tabletop": tabletop, "base_pose": list(base_pose)}, {}
         home = wanted.home or generate_home(wanted.seed, wanted.n_rooms)
         scenario = self._world.start(home, wanted.scenario or make_scenario(home, wanted.seed))
         home = self._world.home
@@ -99,12 +115,13 @@ class WorldServer:
         }, {}
 
     def _observe(self, request: Message) -> tuple[dict[str, Any], Arrays]:
-        commands.parse_observe(request.meta)
+        camera = commands.parse_observe(request.meta)
         world = self._built("observe")
-        frame = world.observe()
+        frame = world.observe(camera)
         meta = {
             "base_pose": list(world.base_pose),
-            "camera": self.camera.to_dict(),
+            "sensor": camera,
+            "camera": (self.camera if camera == "head" else world.wrist_camera).to_dict(),
             "camera_pose": frame.camera_pose.tolist(),
             "labels": frame.labels,
             "render_ms": frame.render_ms,
@@ -119,7 +136,10 @@ class WorldServer:
         length = sum(math.dist(a, b) for a, b in zip([(x, y), *path], path))
         if length > MAX_PATH_M:
             raise RequestError(f"move_base.path: {length:.1f} m long, more than the {MAX_PATH_M:g} m allowed")
-        result = world.move_base(path, yaw)
+        try:
+            result = world.move_base(path, yaw)
+        except ValueError as error:  # holding a handle: the base cannot leave
+            raise RequestError(str(error)) from None
         return {
             "base_pose": list(result.base_pose),
             "reached": result.reached,
@@ -130,7 +150,46 @@ class WorldServer:
 
     def _description(self, request: Message) -> tuple[dict[str, Any], Arrays]:
         commands.parse_description(request.meta)
-        return description(self.camera), {}
+        return robot_description(self.camera), {}
+
+    def _arm_state(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        commands.parse_arm_state(request.meta)
+        return _arm_reply(self._built("arm_state").arm_state()), {}
+
+    def _arm_trajectory(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        wanted = commands.parse_arm_trajectory(request.meta, request.arrays, arm_spec())
+        world = self._built("arm_trajectory")
+        try:
+            result = world.follow_trajectory(wanted.samples, wanted.dt, wanted.stop_on_contact)
+        except ValueError as error:  # the first sample is not where the arm is
+            raise RequestError(f"arm_trajectory.{error}") from None
+        run = result.run
+        return {
+            **_arm_reply(world.arm_state()),
+            "max_error": run.max_error,
+            "final_error": run.final_error,
+            "samples_done": run.samples_done,
+            "stopped_on_contact": run.stopped_on_contact,
+            "contacts": result.contacts,
+        }, {}
+
+    def _gripper(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        close = commands.parse_gripper(request.meta)
+        world = self._built("gripper")
+        world.gripper(close)
+        return _arm_reply(world.arm_state()), {}
+
+
+def _arm_reply(state: ArmState) -> dict[str, Any]:
+    """The arm's state as every arm command answers it."""
+    return {
+        "joints": list(arm_spec().names),
+        "positions": state.positions.tolist(),
+        "tcp_pose": state.tcp_pose.tolist(),
+        "gripper_width": state.gripper_width,
+        "held": state.held,
+        "stowed": state.stowed,
+    }
 
 
 def run_world(
