@@ -61,6 +61,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="accepted miscoverage ε of the conformal set (default 0.3; --set stop.epsilon=…)")
     run.set_defaults(handler=_run)
 
+    skills = commands.add_parser("skills", help="list the installed skills (the homebot.skills entry points)")
+    skills.add_argument("--json", action="store_true", help="print them as JSON")
+    skills.set_defaults(handler=_skills)
+
     watch = commands.add_parser("watch", help="show a running agent's behaviour tree live")
     watch.add_argument("--connect", default=DEFAULT_AGENT_ENDPOINT, metavar="ENDPOINT",
                        help=f"the agent's listen endpoint (default {DEFAULT_AGENT_ENDPOINT})")
@@ -189,6 +193,25 @@ def _run(args: argparse.Namespace) -> int:
         print(f"episode failed: {result['reason']}", file=sys.stderr)
     print(f"run folder: {result['folder']}")
     return 0 if result["status"] == "answered" else 1
+
+
+def _skills(args: argparse.Namespace) -> int:
+    from skills.registry import installed_skills
+
+    entries = installed_skills()
+    rows = [{"name": e.name, "class": e.target, "package": e.distribution, "summary": e.summary()} for e in entries]
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    if not rows:
+        print("no skills installed (entry-point group homebot.skills)")
+        return 0
+    width = max(len(row["name"]) for row in rows)
+    for row in rows:
+        print(f"{row['name']:<{width}}  {row['summary']}")
+        print(f"{'':<{width}}  {row['class']} ({row['package']})")
+    broken = sum(row["summary"].startswith("BROKEN") for row in rows)
+    return 1 if broken else 0
 
 
 def _watch(args: argparse.Namespace) -> int:
