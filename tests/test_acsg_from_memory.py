@@ -1,0 +1,66 @@
+"""Detections for the explorer read off the perception memory of real PyBullet frames."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agent.acsg.from_memory import memory_detections
+from agent.mapping.camera import Intrinsics
+from agent.perception.memory import InstanceMemory
+from worlds.robot import CameraConfig
+from worlds.sim import World
+from worlds.tabletop import tabletop_variant
+
+
+@pytest.fixture(scope="module")
+def detections() -> dict[str, list]:
+    """Occlusion variant 0: a nightstand (door under a drawer), a shampoo bottle in the door's swing,
+    a book; three head-camera views from the robot's place in front of the table."""
+    camera = CameraConfig()
+    world = World(camera)
+    try:
+        base = world.start_tabletop(tabletop_variant("occlusion", 0))
+        memory = InstanceMemory()
+        intrinsics = Intrinsics(camera.width, camera.height, *camera.intrinsics())
+        for turn in (0.0, 0.3, -0.3):
+            world.place((base[0], base[1], base[2] + turn))
+            frame = world.observe()
+            memory.integrate_frame(frame.depth, frame.seg, frame.labels, intrinsics, frame.camera_pose)
+        found = memory_detections(memory, frame.camera_pose[:3, 3])
+    finally:
+        world.close()
+    by_label: dict[str, list] = {}
+    for detection in found:
+        by_label.setdefault(detection.label, []).append(detection)
+    return by_label
+
+
+def _one(detections: dict[str, list], label: str):
+    assert len(detections.get(label, [])) == 1, f"{label}: {detections.get(label)}"
+    return detections[label][0]
+
+
+def test_relations_follow_the_scene(detections) -> None:
+    table, nightstand = _one(detections, "table"), _one(detections, "nightstand")
+    door, drawer = _one(detections, "door"), _one(detections, "drawer")
+    assert table.parent is None
+    assert (nightstand.parent, nightstand.relation) == (table.instance, "on")
+    for thing in ("shampoo", "book"):
+        assert (_one(detections, thing).parent, _one(detections, thing).relation) == (table.instance, "on")
+    assert (door.parent, door.relation) == (drawer.parent, drawer.relation) == (nightstand.instance, "belongs")
+    handles = detections["handle"]
+    assert sorted(h.parent for h in handles) == sorted([door.instance, drawer.instance])
+    assert all(h.relation == "belongs" for h in handles)
+
+
+def test_the_bottle_in_the_door_swing_overlaps_its_swept_box_and_the_book_does_not(detections) -> None:
+    lo, hi = (np.asarray(v) for v in _one(detections, "door").hints["swept"])
+
+    def overlaps(detection) -> bool:
+        a, b = detection.centroid - detection.extent / 2, detection.centroid + detection.extent / 2
+        return bool(np.all(a < hi) and np.all(lo < b))
+
+    assert overlaps(_one(detections, "shampoo"))
+    assert not overlaps(_one(detections, "book"))
+    assert "swept" in _one(detections, "drawer").hints
