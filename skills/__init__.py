@@ -1,2 +1,2 @@
-"""Arm primitives as py_trees behaviours (open, close, pick, place, look), with their kinematics
-and trajectories. Empty until the arm arrives; see the README's layout."""
+"""The arm: kinematics (Pinocchio), jerk-limited trajectories (Ruckig), the skill registry
+(entry-point group ``homebot.skills``), and the primitives built on them as py_trees behaviours."""
