@@ -103,6 +103,17 @@ def _parser() -> argparse.ArgumentParser:
     stop.add_argument("--calibration", type=Path, required=True, help="a calibration file (homebot calibrate)")
     stop.set_defaults(handler=_eval_stop)
 
+    interactive = evaluations.add_parser("interactive", help="interactive exploration: RoboEXP's Table I")
+    interactive.add_argument("--suite", choices=("tabletop",), default="tabletop",
+                             help="the five tabletop tasks, ten variants each (homebot suite tabletop)")
+    interactive.add_argument("--tasks", default=None, help="comma separated (default: all five)")
+    interactive.add_argument("--variants", type=int, default=10, help="variants per task (default 10)")
+    interactive.add_argument("--executor", choices=("symbolic",), default="symbolic",
+                             help="symbolic: perfect perception and skills (the decision logic alone)")
+    interactive.add_argument("--out", type=Path, default=Path("runs/eval-interactive"),
+                             help="results go here; reruns resume")
+    interactive.set_defaults(handler=_eval_interactive)
+
     calibrate = commands.add_parser("calibrate", help="calibrate conformal prediction on a suite")
     _suite_run_options(calibrate, "runs/calibration.json",
                        "the calibration file; episodes go beside it as .episodes.jsonl; reruns resume")
@@ -331,6 +342,25 @@ def _eval_stop(args: argparse.Namespace) -> int:
         print(f"  {row['epsilon']:<6g}{row['promised']:>6.2f}{q_hat:>8}{row['coverage']:>10.3f}"
               f"{row['standard_error']:>8.3f}{row['mean_set_size']:>6.2f}")
     print(f"figures in {args.out}/stop-curves.png, stop-curves.csv, coverage.csv, steps-to-reach.csv")
+    return 0
+
+
+def _eval_interactive(args: argparse.Namespace) -> int:
+    from agent.eval.interactive import COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress
+    from worlds.tabletop import TASKS
+
+    tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
+    try:
+        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress)
+    except ValueError as error:
+        print(f"homebot eval interactive: {error}", file=sys.stderr)
+        return 2
+    print(f"{report['n']} scenes, executor {args.executor}; mean ± s.e. over the variants")
+    print(f"{'task':<12}" + "".join(f"{c.replace('_', ' '):>22}" for c in COLUMNS) + f"{'paper success':>15}")
+    for task, row in report["table"].items():
+        cells = "".join(f"{row[c][0]:>15.2f} ± {row[c][1]:<4.2f}" for c in COLUMNS)
+        print(f"{task:<12}{cells}{PAPER_SUCCESS[task]:>15.0%}")
+    print(f"results {report['results']}")
     return 0
 
 
