@@ -61,3 +61,30 @@ def format_world_table(report: dict[str, Any]) -> str:
 
 def dump(report: dict[str, Any]) -> str:
     return json.dumps(report, indent=2)
+
+
+def bench_skills(n: int = 100, seed: int = 0) -> dict[str, Any]:
+    """IK solve and trajectory computation times on the robot's own URDF and joint limits."""
+    from skills.bench_arm import bench_arm
+    from skills.trajectory import JointLimits
+    from worlds.robot import CameraConfig
+    from worlds.robot_arm import arm_spec, homebot_urdf
+
+    spec = arm_spec()
+    limits = JointLimits(tuple(j.velocity for j in spec.joints), tuple(j.acceleration for j in spec.joints),
+                         tuple(j.jerk for j in spec.joints))
+    return bench_arm(homebot_urdf(CameraConfig()), [j.name for j in spec.joints], spec.tcp_frame, n, seed,
+                     limits=limits)
+
+
+def format_skills_table(report: dict[str, Any]) -> str:
+    return "\n".join([
+        f"bench skills: {report['n']} random reachable TCP poses, seed {report['seed']}, {report['dof']} joints "
+        "(lift + Panda)",
+        f"IK (damped least squares)  median {report['ik_ms_median']:.2f} ms, p95 {report['ik_ms_p95']:.2f} ms, "
+        f"success {report['ik_success_rate']:.0%}, {report['ik_iterations_mean']:.1f} iterations, "
+        f"{report['ik_restarts_mean']:.2f} restarts on average",
+        f"trajectory (Ruckig, {report['trajectory_waypoints']} waypoints, dt {report['trajectory_dt']} s)  "
+        f"median {report['trajectory_ms_median']:.2f} ms, p95 {report['trajectory_ms_p95']:.2f} ms to compute; "
+        f"{report['trajectory_s_median']:.2f} s to run",
+    ])

@@ -127,6 +127,11 @@ def _parser() -> argparse.ArgumentParser:
     step.add_argument("--area", type=float, default=None, help="floor area of the home in m² (60..300)")
     step.add_argument("--json", action="store_true", help="print the figures as JSON")
     step.set_defaults(handler=_bench_step)
+    arm = benches.add_parser("skills", help="IK and trajectory computation times of the arm")
+    arm.add_argument("--n", type=int, default=100, help="random target poses (default 100)")
+    arm.add_argument("--seed", type=int, default=0)
+    arm.add_argument("--json", action="store_true", help="print the figures as JSON")
+    arm.set_defaults(handler=_bench_skills)
     world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
     world.add_argument("--areas", default="60,150,300", help="floor areas in m², comma separated")
     world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
@@ -383,6 +388,17 @@ def _bench_world(args: argparse.Namespace) -> int:
         return 2
     report = bench_world(areas, args.repeats)
     print(dump(report) if args.json else format_world_table(report))
+    return 0
+
+
+def _bench_skills(args: argparse.Namespace) -> int:
+    from agent.bench import bench_skills, dump, format_skills_table
+
+    if args.n < 1:
+        print(f"homebot bench skills: --n must be at least 1, got {args.n}", file=sys.stderr)
+        return 2
+    report = bench_skills(args.n, args.seed)
+    print(dump(report) if args.json else format_skills_table(report))
     return 0
 
 

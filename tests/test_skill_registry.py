@@ -64,3 +64,12 @@ def test_homebot_skills_lists_them_and_flags_broken_ones(tmp_path: Path) -> None
                            env=env, timeout=60)
     assert table.returncode == 1, "a broken skill should make the listing fail"
     assert "wave" in table.stdout and "demo_skills:Wave (demo-skills)" in table.stdout
+
+
+def test_bench_skills_reports_ik_and_trajectory_figures() -> None:
+    done = subprocess.run([sys.executable, "-m", "agent.cli", "bench", "skills", "--n", "3", "--json"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["n"] == 3 and report["dof"] == 8 and report["ik_success_rate"] == 1.0
+    assert report["ik_ms_median"] > 0 and report["trajectory_ms_median"] > 0
