@@ -73,3 +73,13 @@ def test_bench_skills_reports_ik_and_trajectory_figures() -> None:
     report = json.loads(done.stdout)
     assert report["n"] == 3 and report["dof"] == 8 and report["ik_success_rate"] == 1.0
     assert report["ik_ms_median"] > 0 and report["trajectory_ms_median"] > 0
+
+
+def test_homebot_ships_the_seven_primitives_under_their_acsg_names() -> None:
+    from agent.acsg.graph import PRIMITIVES
+    from skills.primitives import PRIMITIVES as SHIPPED
+
+    entries = {entry.name: entry for entry in installed_skills() if entry.distribution == "homebot"}
+    assert set(entries) == set(SHIPPED) and set(SHIPPED) <= set(PRIMITIVES)
+    for name, skill in SHIPPED.items():
+        assert load_skill(name) is skill and skill.skill_name == name

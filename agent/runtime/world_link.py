@@ -9,7 +9,7 @@ import zenoh
 from agent.bus.codec import Message
 from agent.bus.keys import Keys
 from agent.bus.liveness import LivenessWatch
-from agent.bus.rpc import PendingReply
+from agent.bus.rpc import Arrays, PendingReply
 
 
 class WorldLink:
@@ -21,12 +21,20 @@ class WorldLink:
         self.timeout_s = timeout_s
         self.liveness = LivenessWatch(session, keys.world_alive)
 
-    def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None) -> PendingReply:
-        return PendingReply(self.session, self.keys.world_cmd(verb), meta, None,
+    def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
+                arrays: Arrays | None = None) -> PendingReply:
+        """Send the command ``verb`` (with ``arrays``, e.g. an arm trajectory's samples); poll the reply."""
+        return PendingReply(self.session, self.keys.world_cmd(verb), meta, arrays,
                             timeout_s or self.timeout_s, self.liveness.gone)
 
-    def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None) -> Message:
-        return self.request(verb, meta, timeout_s).wait()
+    def describe(self, timeout_s: float | None = None) -> PendingReply:
+        """Ask for the robot's description (URDF, cameras, arm joints and limits)."""
+        return PendingReply(self.session, self.keys.world_description, {}, None,
+                            timeout_s or self.timeout_s, self.liveness.gone)
+
+    def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
+             arrays: Arrays | None = None) -> Message:
+        return self.request(verb, meta, timeout_s, arrays).wait()
 
     def close(self) -> None:
         self.liveness.close()

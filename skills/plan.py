@@ -1,0 +1,856 @@
+"""Motion plans for the arm primitives: from where the arm is to the steps the world will run.
+
+Pure planning (Pinocchio IK from `skills.kinematics`, Ruckig trajectories from `skills.trajectory`),
+no py_trees and no bus: given the arm's joint positions, the base's pose and a target perceived in
+the world frame, each ``plan_*`` method returns a `SkillPlan`, a list of `Step`:
+
+- ``move``: joint samples (N, dof) every ``dt`` seconds for the world's ``arm_trajectory`` command,
+  with the joint waypoints they pass through (so an executor can re-time the rest of a motion from
+  wherever the arm really stopped) and what to check when it ends;
+- ``gripper``: ``open`` or ``close``, and for a close what must then be held (a handle, an object).
+
+Frames. Targets come in the world frame (z up); the kinematics work in the robot's root frame (the
+URDF's ``base_link``: the floor under the base's axis, x ahead), so every pose is taken into it
+with the base pose (x, y, yaw). The base pose itself is read off an arm state: the TCP's world pose
+times the inverse of its forward kinematics (`ArmPlanner.base_pose_from`).
+
+The primitives (RoboEXP's seven, §2 of the spec):
+
+- open / close a door or drawer (`ArmPlanner.plan_open`, `ArmPlanner.plan_close`): a free move to a
+  staging pose, a straight line out to the pre-grasp pose `APPROACH_M` out along the gripper's
+  axis and in onto the handle, close, follow the part's path (a line for drawers, an arc about the
+  hinge for doors, the TCP turning with the door), open, back out along the gripper's axis and
+  withdraw straight towards the base (`WITHDRAW_AHEAD_M`; the staging pose is the same withdrawal
+  ahead of the pre-grasp, so closing starts where opening ended). The chain is solved from the
+  closed grasp outwards whichever way the part moves, so a close takes the posture its open took.
+  Grasp variants (the hand turned half a turn about its axis, tilted about the bar: `FLIPS`,
+  `TILTS`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
+  turn until one chain is reachable throughout. With ``surface_z`` (a table's top) variants whose
+  hand would come down onto it are refused (`HAND_BOXES`): a bar less than ~9 cm above the table
+  cannot be grasped by a Panda hand 21 cm tall across its fingers;
+- pick an object away / back (`ArmPlanner.plan_pick`): top-down. Above the object, down onto its
+  top (the fingers closing across the line of sight from the robot where the object fits that way,
+  since perception places things worst along it), close, lift, carry at height, lower until the
+  object stands a little above where it should (the world puts a released object down onto
+  whatever is under it), open, back up, ready (`READY`);
+- move the wrist camera (`ArmPlanner.plan_look`): one free move that puts the wrist camera's
+  optical frame at a standoff from a point, its optical axis on the point (IK "axis" mode: the
+  rotation about the axis is free), trying steeper and shallower views and shorter and longer
+  standoffs until one is reachable.
+
+Free moves are joint-space; with a ``surface_z`` the hand is kept above it over the whole move
+(`_Builder.free_move`: else with the lift raised on the way, else a planning error). Beyond that
+nothing here checks collisions: the world reports contacts, and free moves and approaches stop on
+the first one. Pure helpers for callers: `stand_pose` (where the base should stand for a part) and
+`idle_spot` (a free place on a table to put an object down).
+
+Failures raise `SkillPlanError` naming the stage and the target: ``IK: grasp pose of drawer handle
+unreachable: ...``, ``clearance: the hand at the drawer handle (0.822 m high) would come ...``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from agent.perception.geometry import PartGeometry, grasp_pose, moved_geometry
+from skills.kinematics import ArmKinematics, IKMode, line_poses
+from skills.trajectory import JointLimits, plan_trajectory
+
+#: The arm folded up over the base's front edge, the hand 0.35 m ahead of the axis at 1.15 m pointing
+#: ahead and 38° down: where skills start from and return to, short of a table's far side and of
+#: the drawers and doors that open towards the robot.
+READY = (0.1, 0.0, -1.3, 0.0, -2.5, 0.0, 2.1, 0.785)
+#: IK seeds reaching ahead with the hand level: fingers above each other (a level bar) or side by side.
+_AHEAD = ((0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, -0.785), (0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, 0.785))
+#: How far out along the gripper's axis a grasp is approached from and retreated to.
+APPROACH_M = 0.10
+#: How far past the perceived handle point (along the approach) the TCP closes: the centre of a
+#: bar's voxels lies within a few millimetres of its axis when its face and top are both seen.
+HANDLE_DEPTH_M = 0.0
+#: A part skill ends with the hand drawn straight back towards the base until it is this far ahead
+#: of the base's axis (at the height and on the side it let go), clear of what it opened.
+WITHDRAW_AHEAD_M = 0.35
+#: Cartesian step of approaches, pulls and carries (m), and of door arcs (rad).
+LINE_STEP_M = 0.01
+ARC_STEP_RAD = math.radians(1.5)
+#: Grasp variants tried in order: half turns about the gripper's axis, tilts about the handle's bar
+#: (negative: the gripper points down onto a level bar, the hand above it; see `_tilted`).
+FLIPS = (0.0, math.pi)
+TILTS = (0.0, -0.3, 0.3, -0.15, 0.15)
+#: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision
+#: meshes): what must stay above a surface (``surface_z``) while the hand works at a handle.
+HAND_BOXES = (((-0.034, -0.106, -0.131), (0.034, 0.106, -0.035)),
+              ((-0.012, -0.068, -0.045), (0.012, 0.068, 0.011)))
+#: How far the hand reaches from the TCP across its axis (half its span along the fingers).
+HAND_RADIUS_M = 0.11
+#: The robot's body around the base's axis (its radius and a margin): no surface reaches in there.
+BODY_RADIUS_M = 0.28
+#: How far above ``surface_z`` the hand keeps.
+SURFACE_CLEARANCE_M = 0.01
+#: Random IK restarts tried for a handle's grasp, per grasp variant, after the structured seeds.
+PART_RESTARTS = 4
+#: The gripper's opening between the fingers (m); objects wider than this less a margin are refused.
+GRIPPER_OPENING_M = 0.08
+#: Speeds as fractions of the joints' velocity limits: free moves, and moves near or holding things.
+FREE_SPEED, CAREFUL_SPEED = 0.5, 0.25
+#: Wrist-camera views tried: (degrees below the horizontal, standoff m), best first.
+LOOK_VIEWS = tuple((pitch, d) for d in (0.3, 0.4, 0.25, 0.5) for pitch in (60.0, 45.0, 75.0, 90.0, 30.0))
+
+
+class SkillPlanError(RuntimeError):
+    """No plan: the text names the stage and the target, e.g. ``IK: grasp pose of drawer handle
+    unreachable: target 1.02 m from the shoulder, beyond the arm's 0.95 m reach``."""
+
+
+@dataclass(frozen=True, eq=False)
+class PartMotion:
+    """What a move holding a handle should do to its part: take its opening from ``start`` to ``end``
+    (m for drawers, rad for doors, 0 = closed). ``reference`` is the TCP's world position when it
+    grasps the closed part; `opening` measures the part's opening from where the TCP is."""
+
+    geometry: PartGeometry  # the part as seen closed
+    reference: np.ndarray
+    start: float
+    end: float
+
+    def opening(self, tcp_point: np.ndarray) -> float:
+        """The part's opening implied by the TCP (which holds the handle) standing at ``tcp_point``."""
+        g = self.geometry
+        point = np.asarray(tcp_point, dtype=float)
+        if g.kind == "drawer":
+            return float((point - self.reference) @ g.normal)
+        assert g.hinge_point is not None and g.hinge_axis is not None
+        axis = g.hinge_axis
+        a = self.reference - g.hinge_point
+        b = point - g.hinge_point
+        a, b = a - (a @ axis) * axis, b - (b @ axis) * axis
+        return float(math.atan2(np.cross(a, b) @ axis, a @ b))
+
+    @property
+    def unit(self) -> str:
+        return "m" if self.geometry.kind == "drawer" else "rad"
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """One command of a plan. ``kind`` "move": ``samples`` (N, dof) every ``dt`` s through the joint
+    ``waypoints`` at ``speed`` (a fraction of the velocity limits), ending with the TCP at
+    ``tcp_target`` (world); ``part_motion`` when it moves a held part. ``kind`` "gripper":
+    ``action`` "open" or "close" and, closing, ``expect_held`` ("handle" or "object")."""
+
+    kind: str
+    name: str
+    samples: np.ndarray | None = None
+    dt: float = 0.0
+    waypoints: np.ndarray | None = None
+    speed: float = FREE_SPEED
+    stop_on_contact: bool = False
+    tcp_target: np.ndarray | None = None
+    part_motion: PartMotion | None = None
+    action: str | None = None
+    expect_held: str | None = None
+
+    @property
+    def duration_s(self) -> float:
+        return 0.0 if self.samples is None else len(self.samples) * self.dt
+
+    def describe(self) -> str:
+        if self.kind == "gripper":
+            return f"{self.name}: gripper {self.action}"
+        assert self.samples is not None
+        return f"{self.name}: {len(self.samples)} samples, {self.duration_s:.2f} s"
+
+
+@dataclass(frozen=True, eq=False)
+class SkillPlan:
+    """The steps of one primitive and what planning them cost.
+
+    ``ik_ms``/``ik_solves``: IK time and calls, over every grasp variant tried; ``trajectory_ms``:
+    Ruckig time; ``planning_ms``: all of it. ``info`` carries what the skill reports afterwards
+    (the grasp pose, the camera pose, the place point...), world frame.
+    """
+
+    skill: str
+    steps: tuple[Step, ...]
+    base_pose: tuple[float, float, float]
+    start_q: np.ndarray
+    final_q: np.ndarray
+    ik_ms: float
+    ik_solves: int
+    trajectory_ms: float
+    planning_ms: float
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def duration_s(self) -> float:
+        """The motions' total duration (gripper actions not counted)."""
+        return sum(step.duration_s for step in self.steps)
+
+    def describe(self) -> str:
+        lines = [f"{self.skill}: {len(self.steps)} steps, {self.duration_s:.1f} s of motion, planned in "
+                 f"{self.planning_ms:.0f} ms ({self.ik_solves} IK solves {self.ik_ms:.0f} ms, "
+                 f"trajectories {self.trajectory_ms:.0f} ms)"]
+        lines += [f"  {step.describe()}" for step in self.steps]
+        return "\n".join(lines)
+
+
+def base_transform(base_pose: Sequence[float]) -> np.ndarray:
+    """The 4x4 world pose of ``base_link`` standing at (x, y, yaw)."""
+    x, y, yaw = (float(v) for v in base_pose)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def rotation_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_x(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _local(rotation: np.ndarray | None = None, z: float = 0.0) -> np.ndarray:
+    """A transform in the TCP's own frame: a rotation, then a shift along its (new) z."""
+    pose = np.eye(4)
+    if rotation is not None:
+        pose[:3, :3] = rotation
+    pose[:3, 3] = pose[:3, :3] @ [0.0, 0.0, z]
+    return pose
+
+
+def _field(entry: Any, name: str) -> Any:
+    return entry[name] if isinstance(entry, Mapping) else getattr(entry, name)
+
+
+class ArmPlanner:
+    """Plans the primitives for one robot: its URDF, its lift-and-arm joints and their limits.
+
+    ``joints``: in command order, each with ``name``, ``velocity``, ``acceleration`` and ``jerk``
+    (the robot description's ``arm.joints``, or `worlds.robot_arm.ArmJoint`). ``camera_frame``: the
+    wrist camera's optical frame, for `plan_look`. Planning is deterministic: IK restarts draw from
+    a generator seeded with ``seed`` afresh for every plan.
+    """
+
+    def __init__(self, urdf_xml: str, joints: Sequence[Any], tcp_frame: str, camera_frame: str | None = None, *,
+                 dt: float = 0.02, ready: Sequence[float] = READY, stowed: Sequence[float] | None = None,
+                 gripper_opening: float = GRIPPER_OPENING_M, free_speed: float = FREE_SPEED,
+                 careful_speed: float = CAREFUL_SPEED, body_radius: float = BODY_RADIUS_M, seed: int = 0) -> None:
+        names = [str(_field(joint, "name")) for joint in joints]
+        self.kin = ArmKinematics(urdf_xml, names, tcp_frame)
+        self.camera = ArmKinematics(urdf_xml, names, camera_frame) if camera_frame else None
+        self.velocity = np.array([float(_field(j, "velocity")) for j in joints])
+        self.acceleration = np.array([float(_field(j, "acceleration")) for j in joints])
+        self.jerk = np.array([float(_field(j, "jerk")) for j in joints])
+        if not (math.isfinite(dt) and 0 < dt <= 0.1):
+            raise ValueError(f"dt: {dt!r} must be a number of seconds in (0, 0.1]")
+        for name, value in (("free_speed", free_speed), ("careful_speed", careful_speed)):
+            if not 0 < value <= 1:
+                raise ValueError(f"{name}: {value!r} must lie in (0, 1] (a fraction of the velocity limits)")
+        self.dt = dt
+        self.ready = self.kin.clip(np.array(ready, dtype=float))
+        self.stowed = None if stowed is None else np.array(stowed, dtype=float)
+        self.gripper_opening = gripper_opening
+        self.free_speed, self.careful_speed = free_speed, careful_speed
+        self.seed = seed
+        self.body_radius = body_radius
+        lifts = [k for k, name in enumerate(names) if "lift" in name]
+        #: The lift's index in ``q`` (a prismatic joint raising the whole arm), if the robot has one.
+        self.lift_index: int | None = lifts[0] if lifts else None
+
+    @classmethod
+    def from_description(cls, description: Mapping[str, Any], **options: Any) -> ArmPlanner:
+        """The planner for the robot a world describes (``world/robot/description``'s reply)."""
+        try:
+            arm = description["arm"]
+            urdf = description["urdf"]
+            joints, tcp = arm["joints"], arm["tcp_frame"]
+        except (KeyError, TypeError) as error:
+            raise ValueError(f"robot description: missing {error} (need urdf and arm.joints/tcp_frame)") from None
+        options.setdefault("stowed", arm.get("stowed"))
+        if "finger_travel" in arm:
+            options.setdefault("gripper_opening", 2 * float(arm["finger_travel"]))
+        robot = description.get("robot")
+        if isinstance(robot, Mapping) and "radius" in robot:
+            options.setdefault("body_radius", float(robot["radius"]) + 0.03)
+        return cls(urdf, joints, tcp, arm.get("wrist_camera_frame"), **options)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.kin.joint_names
+
+    def limits(self, speed: float) -> JointLimits:
+        return JointLimits(self.velocity * speed, self.acceleration, self.jerk)
+
+    def base_pose_from(self, q: np.ndarray, tcp_world: np.ndarray) -> tuple[float, float, float]:
+        """Where the base stands, from the joints and the TCP's world pose (an arm state's)."""
+        base = np.asarray(tcp_world, dtype=float) @ np.linalg.inv(self.kin.forward(q))
+        if abs(base[2, 3]) > 0.02 or abs(base[2, 2] - 1.0) > 1e-3:
+            raise ValueError(f"arm state: the TCP pose puts the base at z {base[2, 3]:.3f} m, tilted "
+                             f"{math.degrees(math.acos(min(1.0, base[2, 2]))):.1f}°: it does not match the joints")
+        return float(base[0, 3]), float(base[1, 3]), math.atan2(base[1, 0], base[0, 0])
+
+    def tcp_world(self, q: np.ndarray, base_pose: Sequence[float]) -> np.ndarray:
+        return base_transform(base_pose) @ self.kin.forward(q)
+
+    def retime(self, step: Step, q: np.ndarray) -> Step:
+        """``step`` again, starting from ``q`` (where the arm really is) through its other waypoints."""
+        if step.kind != "move" or step.waypoints is None:
+            return step
+        waypoints = np.vstack([np.asarray(q, dtype=float)[None, :], step.waypoints[1:]])
+        waypoints = self.kin.clip(waypoints)
+        trajectory = plan_trajectory(waypoints, self.limits(step.speed), self.dt)
+        samples = trajectory.positions[1:] if len(trajectory.positions) > 1 else trajectory.positions
+        return Step(step.kind, step.name, self.kin.clip(samples), self.dt, waypoints, step.speed,
+                    step.stop_on_contact, step.tcp_target, step.part_motion)
+
+    def hold(self, q: np.ndarray) -> Step:
+        """A one-sample move that holds the arm where it is (after a motion that fell short)."""
+        q = self.kin.clip(np.asarray(q, dtype=float))
+        return Step("move", "hold", q[None, :], self.dt, q[None, :], self.careful_speed)
+
+    # -- the primitives ----------------------------------------------------------------------------
+
+    def plan_open(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, amount: float, *,
+                  surface_z: float | None = None, skill: str | None = None) -> SkillPlan:
+        """Open the part ``geometry`` (as seen closed) by ``amount`` (m for drawers, rad for doors).
+
+        ``surface_z``: the top of what the furniture stands on (a table); the hand keeps above it.
+        """
+        _check_amount(geometry, amount)
+        return self._part(q, base_pose, geometry, 0.0, float(amount), skill or f"open_{geometry.kind}", surface_z)
+
+    def plan_close(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, amount: float, *,
+                   geometry_is_open: bool = False, surface_z: float | None = None,
+                   skill: str | None = None) -> SkillPlan:
+        """Close a part that stands open by ``amount``. ``geometry`` is the part as seen closed (what
+        its opening used), or with ``geometry_is_open`` as seen now, open. ``surface_z`` as for `plan_open`."""
+        _check_amount(geometry, amount)
+        if geometry_is_open:
+            geometry = moved_geometry(geometry, -float(amount))
+        return self._part(q, base_pose, geometry, float(amount), 0.0, skill or f"close_{geometry.kind}", surface_z)
+
+    def plan_pick(self, q: np.ndarray, base_pose: Sequence[float], object_point: Sequence[float],
+                  extent: Sequence[float], place_point: Sequence[float], *, skill: str = "pick_away",
+                  surface_z: float | None = None, lift_m: float = 0.15, clearance_m: float = 0.015,
+                  grasp_depth_m: float | None = None) -> SkillPlan:
+        """Pick the object whose top grasp point is ``object_point`` (world) and whose box is ``extent``
+        (dx, dy, dz), and put it down so that that point ends ``clearance_m`` above ``place_point``.
+        ``surface_z``: the table's top, which free moves keep the hand above."""
+        top = _vector(object_point, "object_point")
+        place = _vector(place_point, "place_point")
+        size = _vector(extent, "extent")
+        if np.any(size <= 0):
+            raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
+        width = float(min(size[0], size[1]))
+        if width > self.gripper_opening - 0.005:
+            raise SkillPlanError(f"pick: the object is {width:.3f} m across at its narrowest, too wide for the "
+                                 f"gripper's {self.gripper_opening:.3f} m opening")
+        depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
+        builder = _Builder(self, q, base_pose, surface_z)
+        failures: list[str] = []
+        for y_axis in _closing_directions(size, top, base_pose, self.gripper_opening - 0.005):
+            z_axis = np.array([0.0, 0.0, -1.0])
+            rotation = np.column_stack([np.cross(y_axis, z_axis), y_axis, z_axis])
+            grasp = _pose(rotation, top - depth * np.array([0.0, 0.0, 1.0]))
+            release = _pose(rotation, place + np.array([0.0, 0.0, clearance_m - depth]))
+            up = np.array([0.0, 0.0, lift_m])
+            above_grasp, above_release = _shifted(grasp, up), _shifted(release, up)
+            try:
+                chain = builder.try_chain([
+                    ("above the object", "free", above_grasp),
+                    ("down onto the object", "line", grasp),
+                    ("lift", "line", above_grasp),
+                    ("carry", "line", above_release),
+                    ("lower", "line", release),
+                    ("back up", "line", above_release),
+                ])
+            except SkillPlanError as error:
+                failures.append(str(error))
+                continue
+            builder.free_move("to above the object", chain[0][-1])
+            builder.move("down onto the object", chain[1], careful=True, stop_on_contact=True, tcp_target=grasp)
+            builder.gripper("close", "grasp the object", expect_held="object")
+            builder.move("lift", chain[2], careful=True, tcp_target=above_grasp)
+            builder.move("carry", chain[3], careful=False, tcp_target=above_release)
+            builder.move("lower", chain[4], careful=True, tcp_target=release)
+            builder.gripper("open", "put the object down")
+            builder.move("back up", chain[5], careful=True, tcp_target=above_release)
+            builder.free_move("to ready", self.ready, via_ready=False)
+            info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
+                    "grasp_depth_m": depth}
+            return builder.finish(skill, info)
+        raise SkillPlanError(_best_failure(failures, "pick"))
+
+    def plan_look(self, q: np.ndarray, base_pose: Sequence[float], point: Sequence[float], *,
+                  standoff_m: float | None = None, pitch_deg: float | None = None,
+                  surface_z: float | None = None, skill: str = "move_camera") -> SkillPlan:
+        """Put the wrist camera ``standoff_m`` from ``point`` (world), looking at it from above and in
+        front (``pitch_deg`` below the horizontal); without them the first reachable of `LOOK_VIEWS`."""
+        if self.camera is None:
+            raise SkillPlanError("look: the planner has no wrist camera frame")
+        target = _vector(point, "point")
+        builder = _Builder(self, q, base_pose, surface_z)
+        base = base_transform(base_pose)
+        heading = target[:2] - base[:2, 3]
+        if np.linalg.norm(heading) < 0.2:  # right over the base: look along its heading
+            heading = base[:2, 0]
+        heading = heading / np.linalg.norm(heading)
+        views = [(p, d) for p, d in LOOK_VIEWS if (pitch_deg is None or p == pitch_deg)
+                 and (standoff_m is None or d == standoff_m)] or [(pitch_deg or 60.0, standoff_m or 0.3)]
+        failures = []
+        for pitch, distance in views:
+            a = math.radians(pitch)
+            view = np.array([math.cos(a) * heading[0], math.cos(a) * heading[1], -math.sin(a)])
+            x_axis = np.cross(view, [0.0, 0.0, 1.0]) if abs(view[2]) < 0.999 else np.array([1.0, 0.0, 0.0])
+            x_axis /= np.linalg.norm(x_axis)
+            camera = _pose(np.column_stack([x_axis, np.cross(view, x_axis), view]), target - distance * view)
+            try:
+                goal = builder.ik(camera, f"wrist camera pose {distance:.2f} m from the point at {pitch:.0f}°",
+                                  mode="axis", kinematics=self.camera)
+            except SkillPlanError as error:
+                failures.append(str(error))
+                continue
+            builder.free_move("to the view", goal)
+            reached = base @ self.camera.forward(goal)
+            info = {"camera_pose": reached, "point": target, "standoff_m": distance, "pitch_deg": pitch}
+            return builder.finish(skill, info)
+        raise SkillPlanError(_best_failure(failures, "look"))
+
+    def _part(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, start: float, end: float,
+              skill: str, surface_z: float | None) -> SkillPlan:
+        """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``.
+
+        Whichever way the part moves, the chain is solved from the closed grasp outwards (the grasp,
+        then the part's path to its open end, then the straight lines off either end of it) and
+        the pieces are put in the order the arm runs them; so closing a part takes the posture its
+        opening took, which is known to reach along the whole path.
+        """
+        what = f"{geometry.kind} handle"
+        opening = end > start
+        step = LINE_STEP_M if geometry.kind == "drawer" else ARC_STEP_RAD
+        outer = max(start, end)
+        count = max(1, math.ceil(outer / step - 1e-9))
+        values = np.linspace(0.0, outer, count + 1)
+        path = [grasp_pose(moved_geometry(geometry, float(v))) if v else grasp_pose(geometry) for v in values]
+        builder = _Builder(self, q, base_pose, surface_z)
+        failures: list[str] = []
+        for flip in FLIPS:
+            for tilt in TILTS:
+                variant = _tilted(path[0], flip, tilt) @ _local(z=HANDLE_DEPTH_M)
+                poses = [pose @ variant for pose in path]
+                if surface_z is not None:
+                    low = min(hand_bottom(pose) for pose in (*poses, *(p @ _local(z=-APPROACH_M) for p in poses)))
+                    if low < surface_z + SURFACE_CLEARANCE_M:
+                        failures.append(f"clearance: the hand at the {what} ({poses[0][2, 3]:.3f} m high) would come "
+                                        f"{surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface at "
+                                        f"{surface_z:.3f} m")
+                        continue
+                chain = self._part_chain(builder, poses, what, opening, failures)
+                if chain is None:
+                    continue
+                swept, approach, retreat = chain
+                grasp, release = (poses[0], poses[-1]) if opening else (poses[-1], poses[0])
+                motion = PartMotion(geometry, poses[0][:3, 3], start, end)
+                backwards = approach[::-1]
+                builder.free_move(f"to the pre-grasp pose of the {what}", backwards[0])
+                builder.move(f"approach the {what}", backwards, careful=True, stop_on_contact=True, tcp_target=grasp)
+                builder.gripper("close", f"grasp the {what}", expect_held="handle")
+                builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
+                             swept if opening else swept[::-1], careful=True, tcp_target=release, part_motion=motion)
+                builder.gripper("open", f"let go of the {what}")
+                builder.move(f"back off the {what}", retreat, careful=True,
+                             tcp_target=builder.base @ self.kin.forward(retreat[-1]))
+                info = {"grasp_pose": grasp, "release_pose": release, "flip": flip, "tilt": tilt,
+                        "kind": geometry.kind, "start": start, "end": end}
+                return builder.finish(skill, info)
+        raise SkillPlanError(_best_failure(failures, what))
+
+    def _part_chain(self, builder: _Builder, poses: list[np.ndarray], what: str, opening: bool,
+                    failures: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(part path from closed to open, approach, retreat) joint waypoints for one grasp variant,
+        trying the closed grasp's IK postures in turn until one reaches along the whole chain; None
+        (with the reasons in ``failures``) when none does."""
+        try:
+            for closed in builder.solutions(poses[0], f"grasp pose of {what}", restarts=PART_RESTARTS):
+                try:
+                    swept = builder.path(closed, poses[1:], f"{'opening' if opening else 'closing'} path of {what}")
+                    first, last = (closed, swept[-1]) if opening else (swept[-1], closed)
+                    approach = self._off(builder, first, poses[0 if opening else -1], f"pre-grasp pose of {what}")
+                    retreat = self._off(builder, last, poses[-1 if opening else 0], f"retreat from {what}")
+                except SkillPlanError as error:
+                    failures.append(str(error))
+                    continue
+                return swept, approach, retreat
+        except SkillPlanError as error:
+            failures.append(str(error))
+        return None
+
+    def _off(self, builder: _Builder, q: np.ndarray, pose: np.ndarray, what: str) -> np.ndarray:
+        """Joint waypoints from ``q`` (the TCP at ``pose``) straight back along the gripper's axis by
+        `APPROACH_M`, then, where that is still further out, straight back towards the base until the
+        hand is `WITHDRAW_AHEAD_M` ahead of its axis (at the same height and on the same side). The
+        second leg is left out when it is out of reach; the first is required."""
+        out = pose @ _local(z=-APPROACH_M)
+        waypoints = builder.path(q, line_poses(pose, out, LINE_STEP_M), what)
+        local = builder.to_base @ out
+        if local[0, 3] > WITHDRAW_AHEAD_M + 0.02:
+            target = local.copy()
+            target[0, 3] = WITHDRAW_AHEAD_M
+            try:
+                back = builder.path(waypoints[-1], line_poses(out, builder.base @ target, LINE_STEP_M),
+                                    f"withdrawal from {what}")
+            except SkillPlanError:
+                return waypoints
+            waypoints = np.vstack([waypoints, back[1:]])
+        return waypoints
+
+
+def _tilted(grasp: np.ndarray, flip: float, tilt: float) -> np.ndarray:
+    """The grasp variant turned ``flip`` about the gripper's axis and ``tilt`` about the bar, the tilt
+    signed so that a negative one points the gripper down (a level bar grasped from above)."""
+    turned = rotation_z(flip)
+    rotation = turned @ rotation_x(tilt)
+    pointing = (grasp[:3, :3] @ rotation)[2, 2]  # the tilted approach's vertical component
+    if tilt and (pointing > 0) == (tilt < 0) and abs(pointing) > 1e-6:
+        rotation = turned @ rotation_x(-tilt)
+    return _local(rotation)
+
+
+_HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
+                          for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+
+
+def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
+    """The lowest point of the hand and open fingers (`HAND_BOXES`) with the TCP at ``tcp_pose`` (world z).
+
+    With ``base`` (the base's 4x4 world pose) only the corners further than ``body_radius`` from
+    its axis count: over the robot's own body there is no table (the stowed arm sits inside it).
+    """
+    corners = _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+    if base is not None:
+        corners = corners[np.hypot(corners[:, 0] - base[0, 3], corners[:, 1] - base[1, 3]) > body_radius]
+    return float(corners[:, 2].min()) if len(corners) else math.inf
+
+
+class _Builder:
+    """Accumulates the steps of one plan from a start configuration, timing IK and Ruckig."""
+
+    def __init__(self, planner: ArmPlanner, q: np.ndarray, base_pose: Sequence[float],
+                 surface_z: float | None = None) -> None:
+        self.planner = planner
+        self.surface_z = surface_z
+        kin = planner.kin
+        q = np.asarray(q, dtype=float)
+        if q.shape != (kin.dof,) or not np.all(np.isfinite(q)):
+            raise SkillPlanError(f"start: joint positions {np.round(q, 4).tolist()} are not {kin.dof} finite numbers")
+        self.start = kin.clip(q)
+        self.q = self.start.copy()
+        self.base_pose = tuple(float(v) for v in base_pose)
+        self.base = base_transform(self.base_pose)
+        self.to_base = np.linalg.inv(self.base)
+        self.steps: list[Step] = []
+        self.began = time.perf_counter()
+        self.ik_s = self.trajectory_s = 0.0
+        self.ik_solves = 0
+        self.rng = np.random.default_rng(planner.seed)
+
+    def local(self, pose_world: np.ndarray) -> np.ndarray:
+        return self.to_base @ pose_world
+
+    def seeds(self, first: np.ndarray | None, target_local: np.ndarray) -> list[np.ndarray]:
+        """IK seeds: ``first`` (the previous waypoint of a chain) if given, then the ready pose and
+        postures reaching ahead, each turned (joint 1) towards the target and as they are, then
+        where the arm is. Seeds close to the target's posture keep IK off contorted solutions."""
+        ready = self.planner.ready
+        shoulder = ready.copy()
+        toward = math.atan2(target_local[1, 3], target_local[0, 3] - 0.08)  # panda_link0 is 8 cm ahead
+        postures = [ready, *(np.array(seed) for seed in _AHEAD)]
+        turned = []
+        for posture in postures:
+            seed = posture.copy()
+            seed[1] = shoulder[1] + toward
+            turned.append(seed)
+        seeds = [*turned, *postures, self.q]
+        return [first, *seeds] if first is not None else seeds
+
+    def ik(self, pose_world: np.ndarray, what: str, seed: np.ndarray | None = None, mode: IKMode = "pose",
+           kinematics: ArmKinematics | None = None) -> np.ndarray:
+        """A configuration putting the TCP (or ``kinematics``' frame) at ``pose_world``, tried from a
+        few seeds before random restarts; raises SkillPlanError naming ``what``."""
+        for q in self.solutions(pose_world, what, seed, mode, kinematics):
+            return q
+        raise AssertionError("solutions() raises when it finds none")
+
+    def solutions(self, pose_world: np.ndarray, what: str, seed: np.ndarray | None = None, mode: IKMode = "pose",
+                  kinematics: ArmKinematics | None = None, restarts: int = 10) -> Iterator[np.ndarray]:
+        """Distinct configurations putting the TCP at ``pose_world``: one per seed (`seeds`) that
+        converges to a posture not found yet, then up to ``restarts`` from random configurations.
+        Raises SkillPlanError naming ``what`` when there is none at all."""
+        kin = kinematics or self.planner.kin
+        target = self.local(pose_world)
+        found: list[np.ndarray] = []
+        reason = ""
+        starts = [*self.seeds(seed, target), *(kin.random_configuration(self.rng) for _ in range(restarts))]
+        for start in starts:
+            began = time.perf_counter()
+            result = kin.solve_ik(target, kin.clip(start), self.rng, mode=mode, max_restarts=0)
+            self.ik_s += time.perf_counter() - began
+            self.ik_solves += 1
+            if not result.success:
+                reason = reason or result.reason
+                continue
+            if all(np.abs(result.q - other).max() > 0.3 for other in found):
+                found.append(result.q)
+                yield result.q
+        if not found:
+            raise SkillPlanError(f"IK: {what} unreachable: {reason}")
+
+    def path(self, start_q: np.ndarray, poses_world: Sequence[np.ndarray], what: str) -> np.ndarray:
+        """Joint waypoints (with ``start_q`` first) taking the TCP through ``poses_world``."""
+        kin = self.planner.kin
+        began = time.perf_counter()
+        result = kin.plan_cartesian_path(start_q, [self.local(pose) for pose in poses_world], max_joint_jump=0.35,
+                                         max_deviation=0.004)
+        self.ik_s += time.perf_counter() - began
+        self.ik_solves += len(poses_world)
+        if not result.success:
+            raise SkillPlanError(f"IK: {what} unreachable: {result.reason}")
+        return result.q
+
+    def try_chain(self, stages: list[tuple[str, str, Any]]) -> list[np.ndarray]:
+        """Joint waypoints for every stage in turn: ("free", pose) an IK solution (a one-row array),
+        ("line", pose) a straight TCP line from the previous pose, ("path", poses) TCP poses."""
+        kin = self.planner.kin
+        chains: list[np.ndarray] = []
+        q = self.q
+        pose = None
+        for what, kind, target in stages:
+            if kind == "free":
+                q = self.ik(target, what, seed=None if pose is None else q)
+                chains.append(q[None, :])
+                pose = target
+            elif kind == "line":
+                assert pose is not None
+                current = self.base @ kin.forward(q)
+                chains.append(self.path(q, line_poses(current, target, LINE_STEP_M), what))
+                q, pose = chains[-1][-1], target
+            else:
+                chains.append(self.path(q, list(target), what))
+                q, pose = chains[-1][-1], target[-1]
+        return chains
+
+    def move(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None) -> None:
+        self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion))
+        self.q = self.steps[-1].waypoints[-1].copy()
+
+    def step(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None) -> Step:
+        """A move through joint ``waypoints`` from where the plan has the arm (prepended if missing)."""
+        planner = self.planner
+        speed = planner.careful_speed if careful else planner.free_speed
+        waypoints = np.asarray(waypoints, dtype=float)
+        if len(waypoints) and np.abs(waypoints[0] - self.q).max() > 1e-9:
+            waypoints = np.vstack([self.q[None, :], waypoints])
+        waypoints = planner.kin.clip(waypoints)
+        began = time.perf_counter()
+        try:
+            trajectory = plan_trajectory(waypoints, planner.limits(speed), planner.dt)
+        except (RuntimeError, ValueError) as error:
+            raise SkillPlanError(f"trajectory: {name}: {error}") from None
+        self.trajectory_s += time.perf_counter() - began
+        samples = trajectory.positions[1:] if len(trajectory.positions) > 1 else trajectory.positions
+        samples = planner.kin.clip(samples)  # Ruckig may overshoot a waypoint on a limit by 1e-16
+        return Step("move", name, samples, planner.dt, waypoints, speed, stop_on_contact, tcp_target, part_motion)
+
+    def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True) -> None:
+        """A joint-space move to ``goal``, by way of the ready pose when the arm starts stowed.
+
+        With a known surface the hand must stay `SURFACE_CLEARANCE_M` above it all the way; a
+        straight joint-space move that dips lower is replaced by one with the lift raised to the
+        top of its travel on the way (the arm swings over, then the lift lets it down), and if that
+        dips too the plan fails.
+        """
+        planner = self.planner
+        goal = np.asarray(goal, dtype=float)
+        start = [self.q]
+        stowed = planner.stowed is not None and np.abs(self.q - planner.stowed).max() < 0.1
+        if via_ready and stowed:
+            start.append(planner.ready)
+        routes = [np.array([*start, goal])]
+        lift = planner.lift_index
+        if self.surface_z is not None and lift is not None:
+            high = planner.kin.upper[lift]
+            over = [start[-1].copy(), goal.copy()]
+            for q in over:
+                q[lift] = high
+            routes.append(np.array([*start, *over, goal]))
+        target = self.base @ planner.kin.forward(goal)
+        low = math.inf
+        for waypoints in routes:
+            step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
+            low = self.lowest(step)
+            if self.surface_z is None or low >= self.surface_z + SURFACE_CLEARANCE_M:
+                self.steps.append(step)
+                self.q = goal.copy()
+                return
+        raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
+                             f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
+                             f"at {self.surface_z:.3f} m, even with the lift up")
+
+    def lowest(self, step: Step) -> float:
+        """The lowest the hand gets (world z, `hand_bottom`) over a move's samples."""
+        assert step.samples is not None
+        kin = self.planner.kin
+        picks = np.unique(np.r_[np.arange(0, len(step.samples), 3), len(step.samples) - 1])
+        return min(hand_bottom(self.base @ kin.forward(step.samples[k]), self.base, self.planner.body_radius)
+                   for k in picks)
+
+    def gripper(self, action: str, name: str, expect_held: str | None = None) -> None:
+        self.steps.append(Step("gripper", name, action=action, expect_held=expect_held))
+
+    def finish(self, skill: str, info: dict[str, Any]) -> SkillPlan:
+        planning_ms = 1e3 * (time.perf_counter() - self.began)
+        return SkillPlan(skill, tuple(self.steps), self.base_pose, self.start, self.q.copy(), 1e3 * self.ik_s,
+                         self.ik_solves, 1e3 * self.trajectory_s, planning_ms, info)
+
+
+def _closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float],
+                        opening: float) -> list[np.ndarray]:
+    """Horizontal directions for the fingers to close along (the TCP's y) on an object with box
+    ``size``, best first, each followed by its opposite (the hand turned half a turn).
+
+    First across the line of sight from the base: a camera on the robot places a thing best across
+    that line and worst along it (it sees only its near side), and fingers closing across the line
+    of sight forgive an error along it. Then the box's narrower axis, the other, the diagonals.
+    Only directions along which the box fits between the fingers are kept.
+    """
+    base = np.asarray(base_pose[:2], dtype=float)
+    sight = point[:2] - base
+    sight = sight / np.linalg.norm(sight) if np.linalg.norm(sight) > 1e-6 else np.array([1.0, 0.0])
+    narrow, wide = ((1.0, 0.0), (0.0, 1.0)) if size[0] <= size[1] else ((0.0, 1.0), (1.0, 0.0))
+    diagonal = math.sqrt(0.5)
+    candidates = [(-sight[1], sight[0]), narrow, wide, (diagonal, diagonal), (diagonal, -diagonal)]
+    found: list[np.ndarray] = []
+    for x, y in candidates:
+        if abs(x) * size[0] + abs(y) * size[1] > opening:
+            continue
+        for sign in (1.0, -1.0):
+            direction = np.array([sign * x, sign * y, 0.0])
+            if all(np.linalg.norm(direction - other) > 1e-6 for other in found):
+                found.append(direction)
+    return found
+
+
+def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
+               door_share: float = 0.35) -> tuple[float, float, float]:
+    """Where the base should stand to open or close a part, from where it stands now.
+
+    It stays as far from the part's front as it is (slid along the front, never towards it) and
+    turns to face the front square on, with its axis opposite the handle of a drawer, or
+    ``door_share`` of the way from a door's hinge to its handle: there the door, swinging open,
+    passes beside the arm instead of through it, and the handle stays within reach.
+    """
+    x, y, _ = (float(v) for v in base_pose)
+    normal = np.array([geometry.normal[0], geometry.normal[1]], dtype=float)
+    if np.linalg.norm(normal) < 1e-6:
+        raise SkillPlanError("stand pose: the part's front normal is vertical")
+    normal /= np.linalg.norm(normal)
+    along = np.array([-normal[1], normal[0]])
+    if geometry.kind == "door" and geometry.hinge_point is not None:
+        aim = geometry.hinge_point[:2] + door_share * (geometry.handle_point[:2] - geometry.hinge_point[:2])
+    else:
+        aim = geometry.handle_point[:2]
+    here = np.array([x, y])
+    there = here + along * float((aim - here) @ along)
+    return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])
+
+
+def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
+              near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
+              hand_radius_m: float = HAND_RADIUS_M) -> np.ndarray:
+    """A free place on a surface to put an object of footprint ``radius`` down: RoboEXP's idle space.
+
+    ``surface_points`` (N, 3): the surface's points (a table's, from the memory); its top is their
+    99th height percentile and only points within 1.5 cm of it count. ``obstacle_points``: every
+    other thing's points, and the object's own (a spot where it stands now is no idle spot). Those
+    standing above the top (by more than 5 mm) must stay ``margin_m`` beyond the object's ``radius``
+    or the hand's reach around its TCP (``hand_radius_m``), whichever is more, away in the plane;
+    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+    Returns (x, y, top z) of the candidate on a ``grid_m`` grid nearest to ``near`` (x, y);
+    raises SkillPlanError when there is none.
+    """
+    points = np.asarray(surface_points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 10:
+        raise SkillPlanError(f"idle spot: the surface has {len(points)} points, too few to place anything on")
+    top = float(np.percentile(points[:, 2], 99))
+    flat = points[points[:, 2] >= top - 0.015, :2]
+    keep = radius + margin_m
+    clear = max(radius, hand_radius_m) + margin_m
+    lo, hi = flat.min(axis=0) + keep, flat.max(axis=0) - keep
+    if np.any(lo > hi):
+        size = np.round(flat.max(axis=0) - flat.min(axis=0), 2).tolist()
+        raise SkillPlanError(f"idle spot: the surface's top ({size} m) is too small for a {2 * radius:.2f} m object")
+    xs, ys = np.arange(lo[0], hi[0] + 1e-9, grid_m), np.arange(lo[1], hi[1] + 1e-9, grid_m)
+    candidates = np.array([(x, y) for x in xs for y in ys])
+    from scipy.spatial import cKDTree
+
+    on_top, _ = cKDTree(flat).query(candidates, distance_upper_bound=grid_m)
+    candidates = candidates[np.isfinite(on_top)]
+    standing = [np.asarray(o, dtype=float) for o in obstacle_points if len(o)]
+    standing = [o[o[:, 2] > top + 0.005, :2] for o in standing]
+    standing = [o for o in standing if len(o)]
+    if standing and len(candidates):
+        gap, _ = cKDTree(np.vstack(standing)).query(candidates)
+        candidates = candidates[gap >= clear]
+    if not len(candidates):
+        raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m")
+    best = candidates[int(np.argmin(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1)))]
+    return np.array([best[0], best[1], top])
+
+
+def _check_amount(geometry: PartGeometry, amount: float) -> None:
+    limit, unit = (0.6, "m") if geometry.kind == "drawer" else (math.pi, "rad")
+    if not (math.isfinite(amount) and 0 < amount <= limit):
+        raise SkillPlanError(f"amount: {amount!r} {unit} must lie in (0, {limit:g}] for a {geometry.kind}")
+
+
+def _vector(value: Sequence[float], name: str) -> np.ndarray:
+    vector = np.asarray(value, dtype=float)
+    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+        raise SkillPlanError(f"{name}: expected 3 finite numbers, got {value!r}")
+    return vector
+
+
+def _pose(rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rotation, position
+    return pose
+
+
+def _shifted(pose: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    moved = pose.copy()
+    moved[:3, 3] += offset
+    return moved
+
+
+def _best_failure(failures: list[str], what: str) -> str:
+    """The failure of the variant that got furthest (stages are tried in order), and how many were tried."""
+    if not failures:
+        return f"{what}: no variant to try"
+    stages = ("above", "wrist", "grasp", "down", "lift", "carry", "lower", "opening", "closing", "pre-grasp",
+              "retreat", "back")
+
+    def progress(message: str) -> int:
+        return max((k for k, word in enumerate(stages) if f"IK: {word}" in message), default=-1)
+
+    best = max(failures, key=progress)
+    return f"{best} (and {len(failures) - 1} other grasp variants failed)" if len(failures) > 1 else best

@@ -1,0 +1,247 @@
+"""Planning the arm primitives without a world: the robot's own URDF in Pinocchio, every trajectory
+checked by the world's own request parser (limits, speeds), every pose by forward kinematics."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis, moved_geometry
+from skills.plan import (
+    APPROACH_M,
+    READY,
+    ArmPlanner,
+    SkillPlan,
+    SkillPlanError,
+    Step,
+    base_transform,
+    hand_bottom,
+    idle_spot,
+    stand_pose,
+)
+from worlds.commands import parse_arm_trajectory
+from worlds.robot import CameraConfig
+from worlds.robot_arm import STOWED, arm_spec, robot_description
+
+SPEC = arm_spec()
+#: In front of a table whose storage fronts stand at y = 0.05, like the tabletop scenes' robot.
+BASE = (0.3, -0.72, math.pi / 2)
+SURFACE = 0.755
+
+
+@pytest.fixture(scope="module")
+def planner() -> ArmPlanner:
+    return ArmPlanner.from_description(robot_description(CameraConfig()))
+
+
+def _drawer(height: float = 1.0, x: float = 0.3) -> PartGeometry:
+    return PartGeometry("drawer", np.array([x, 0.05, height]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]))
+
+
+def _door() -> PartGeometry:
+    """A left-hinged door 0.4 m wide, its vertical handle at x = 0.4."""
+    handle, hinge, normal = np.array([0.4, 0.05, 0.95]), np.array([0.0, 0.085, 0.95]), np.array([0.0, -1.0, 0.0])
+    return PartGeometry("door", handle, np.array([0.0, 0.0, 1.0]), normal, hinge, hinge_axis(handle, hinge, normal))
+
+
+def _tcp(planner: ArmPlanner, q: np.ndarray) -> np.ndarray:
+    return base_transform(BASE) @ planner.kin.forward(q)
+
+
+def _check_runnable(plan: SkillPlan, start: np.ndarray) -> None:
+    """Every move passes the world's own checks, and starts where the previous one ended."""
+    q = np.asarray(start, dtype=float)
+    for step in plan.steps:
+        if step.kind == "gripper":
+            continue
+        assert step.samples is not None
+        parse_arm_trajectory({"dt": step.dt}, {"samples": step.samples}, SPEC)  # raises on any violation
+        assert np.all(np.abs(step.samples[0] - q) <= SPEC.column("velocity") * step.dt + 1e-6), step.name
+        q = step.samples[-1]
+    assert np.allclose(q, plan.final_q, atol=1e-6)
+
+
+def _close_pose(a: np.ndarray, b: np.ndarray, metres: float = 0.002, degrees: float = 1.0) -> bool:
+    angle = math.degrees(math.acos(np.clip((np.trace(a[:3, :3].T @ b[:3, :3]) - 1) / 2, -1.0, 1.0)))
+    return bool(np.linalg.norm(a[:3, 3] - b[:3, 3]) < metres and angle < degrees)
+
+
+def test_the_base_pose_is_read_back_from_the_joints_and_the_tcp(planner: ArmPlanner) -> None:
+    rng = np.random.default_rng(3)
+    for base in [(0.0, 0.0, 0.0), (1.2, -3.4, 2.9), (-0.5, 0.7, -1.2)]:
+        q = planner.kin.random_configuration(rng)
+        tcp = base_transform(base) @ planner.kin.forward(q)
+        assert planner.base_pose_from(q, tcp) == pytest.approx(base, abs=1e-9)
+    with pytest.raises(ValueError, match="does not match the joints"):
+        planner.base_pose_from(np.array(STOWED), planner.kin.forward(np.array(READY)))
+
+
+def test_opening_a_drawer_approaches_grasps_pulls_lets_go_and_backs_off(planner: ArmPlanner) -> None:
+    geometry = _drawer()
+    plan = planner.plan_open(np.array(STOWED), BASE, geometry, 0.2, surface_z=SURFACE)
+    assert [(s.kind, s.action) for s in plan.steps] == [("move", None), ("move", None), ("gripper", "close"),
+                                                        ("move", None), ("gripper", "open"), ("move", None)]
+    assert plan.skill == "open_drawer" and plan.steps[2].expect_held == "handle"
+    _check_runnable(plan, np.array(STOWED))
+    free, approach, _, pull, _, retreat = plan.steps
+    assert free.stop_on_contact and approach.stop_on_contact and not pull.stop_on_contact
+    grasp = _tcp(planner, approach.samples[-1])
+    assert _close_pose(grasp, plan.info["grasp_pose"]) and np.linalg.norm(grasp[:3, 3] - geometry.handle_point) < 0.003
+    assert grasp[:3, 2] @ -geometry.normal > math.cos(0.31)  # pointing into the front, at most the largest tilt
+    assert abs(grasp[:3, 0] @ geometry.handle_axis) > 0.999  # the bar lies between the fingers
+    # the approach comes straight in along the gripper's axis for its last APPROACH_M
+    for q in approach.samples[-30:]:
+        offset = _tcp(planner, q)[:3, 3] - grasp[:3, 3]
+        assert np.linalg.norm(offset - (offset @ grasp[:3, 2]) * grasp[:3, 2]) < 0.004
+    pulled = _tcp(planner, pull.samples[-1])
+    assert pulled[:3, 3] - grasp[:3, 3] == pytest.approx(0.2 * geometry.normal, abs=0.003)
+    assert pull.part_motion is not None and pull.part_motion.opening(pulled[:3, 3]) == pytest.approx(0.2, abs=0.003)
+    for q in pull.samples[::5]:  # a straight pull: the TCP keeps its height and its orientation
+        pose = _tcp(planner, q)
+        assert abs(pose[2, 3] - grasp[2, 3]) < 0.003
+        assert np.allclose(pose[:3, :3], grasp[:3, :3], atol=0.02)
+    backed = _tcp(planner, retreat.samples[-1])
+    assert backed[:3, 3] @ -geometry.normal < pulled[:3, 3] @ -geometry.normal - APPROACH_M + 0.003
+    assert plan.ik_solves > 0 and plan.ik_ms > 0 and plan.trajectory_ms > 0
+    assert plan.planning_ms >= plan.ik_ms and plan.duration_s > 5
+
+
+def test_opening_a_door_swings_the_tcp_about_the_hinge(planner: ArmPlanner) -> None:
+    geometry = _door()
+    amount = math.radians(75)
+    plan = planner.plan_open(np.array(READY), BASE, geometry, amount, surface_z=SURFACE)
+    _check_runnable(plan, np.array(READY))
+    pull = next(step for step in plan.steps if step.part_motion is not None)
+    assert pull.name == "pull the door open"
+    start, end = _tcp(planner, pull.samples[0]), _tcp(planner, pull.samples[-1])
+    radius = np.linalg.norm((start[:3, 3] - geometry.hinge_point)[:2])
+    assert radius == pytest.approx(geometry.radius, abs=0.01)
+    for q in pull.samples[::5]:
+        pose = _tcp(planner, q)
+        assert np.linalg.norm((pose[:3, 3] - geometry.hinge_point)[:2]) == pytest.approx(radius, abs=0.006)
+    assert pull.part_motion.opening(end[:3, 3]) == pytest.approx(amount, abs=0.01)
+    turned = moved_geometry(geometry, amount)  # the TCP turned with the door: still across the bar
+    assert end[:3, 2] @ -turned.normal > math.cos(0.31) and abs(end[:3, 0] @ turned.handle_axis) > 0.999
+
+
+def test_closing_retraces_the_opening_from_where_the_part_stands(planner: ArmPlanner) -> None:
+    for geometry, amount in ((_drawer(), 0.2), (_door(), math.radians(70))):
+        opened = planner.plan_open(np.array(READY), BASE, geometry, amount, surface_z=SURFACE)
+        plan = planner.plan_close(opened.final_q, BASE, geometry, amount, surface_z=SURFACE)
+        assert plan.skill == f"close_{geometry.kind}"
+        _check_runnable(plan, opened.final_q)
+        push = next(step for step in plan.steps if step.part_motion is not None)
+        assert _close_pose(_tcp(planner, push.samples[0]), opened.info["release_pose"], 0.003, 1.5)
+        assert _close_pose(_tcp(planner, push.samples[-1]), opened.info["grasp_pose"], 0.003, 1.5)
+        assert push.part_motion.opening(_tcp(planner, push.samples[-1])[:3, 3]) == pytest.approx(0.0, abs=0.005)
+        seen_open = planner.plan_close(opened.final_q, BASE, moved_geometry(geometry, amount), amount,
+                                       geometry_is_open=True, surface_z=SURFACE)
+        again = next(step for step in seen_open.steps if step.part_motion is not None)
+        assert _close_pose(_tcp(planner, again.samples[-1]), opened.info["grasp_pose"], 0.003, 1.5)
+
+
+def test_planning_errors_name_the_stage_and_the_target(planner: ArmPlanner) -> None:
+    q = np.array(STOWED)
+    with pytest.raises(SkillPlanError, match=r"clearance: the hand at the drawer handle \(0\.800 m high\) would come"):
+        planner.plan_open(q, BASE, _drawer(height=0.80), 0.2, surface_z=SURFACE)
+    with pytest.raises(SkillPlanError, match=r"IK: grasp pose of drawer handle unreachable: target .* beyond the arm"):
+        planner.plan_open(q, BASE, PartGeometry("drawer", np.array([0.3, 1.5, 1.0]), np.array([1.0, 0, 0]),
+                                                np.array([0.0, -1.0, 0.0])), 0.2)
+    with pytest.raises(SkillPlanError, match=r"amount: 0\.9 m must lie in \(0, 0\.6\] for a drawer"):
+        planner.plan_open(q, BASE, _drawer(), 0.9)
+    with pytest.raises(SkillPlanError, match=r"pick: the object is 0\.100 m across at its narrowest, too wide"):
+        planner.plan_pick(q, BASE, (0.3, -0.2, 0.87), (0.1, 0.12, 0.1), (0.5, -0.2, 0.87))
+    with pytest.raises(SkillPlanError, match=r"place_point: expected 3 finite numbers"):
+        planner.plan_pick(q, BASE, (0.3, -0.2, 0.87), (0.06, 0.06, 0.1), (0.5, math.nan, 0.87))
+
+
+def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_place(planner: ArmPlanner) -> None:
+    top, place = np.array([0.25, -0.15, 0.87]), np.array([0.45, -0.2, 0.87])
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.066, 0.07, 0.12), place, surface_z=SURFACE)
+    assert [s.name for s in plan.steps] == ["to above the object", "down onto the object", "grasp the object", "lift",
+                                            "carry", "lower", "put the object down", "back up", "to ready"]
+    assert plan.steps[2].expect_held == "object"
+    _check_runnable(plan, np.array(STOWED))
+    steps = {step.name: step for step in plan.steps}
+    depth = plan.info["grasp_depth_m"]
+    grasp = _tcp(planner, steps["down onto the object"].samples[-1])
+    assert grasp[:3, 3] == pytest.approx(top - [0, 0, depth], abs=0.002)
+    sight = (top - [*BASE[:2], 0.0]) * [1, 1, 0]
+    assert grasp[:3, 2] @ [0, 0, -1] > 0.999  # straight down
+    assert abs(grasp[:3, 1] @ sight) < 1e-6  # the fingers close across the line of sight from the robot
+    release = _tcp(planner, steps["lower"].samples[-1])
+    for q in steps["carry"].samples[::5]:  # 0.15 m over the grasp and over the release, all the way
+        assert _tcp(planner, q)[2, 3] >= min(grasp[2, 3], release[2, 3]) + 0.15 - 0.003
+    assert release[:3, 3] == pytest.approx(place + [0, 0, 0.015 - depth], abs=0.002)
+    assert np.allclose(release[:3, :3], grasp[:3, :3], atol=0.01)  # carried without turning
+
+
+def test_the_wrist_camera_is_put_at_a_standoff_looking_at_the_point(planner: ArmPlanner) -> None:
+    point = np.array([0.3, -0.05, 0.85])
+    plan = planner.plan_look(np.array(STOWED), BASE, point)
+    _check_runnable(plan, np.array(STOWED))
+    assert plan.skill == "move_camera" and len(plan.steps) == 1
+    camera = base_transform(BASE) @ planner.camera.forward(plan.final_q)
+    assert camera == pytest.approx(plan.info["camera_pose"], abs=1e-9)
+    distance = plan.info["standoff_m"]
+    assert camera[:3, 3] + distance * camera[:3, 2] == pytest.approx(point, abs=0.003)
+    assert math.degrees(math.asin(-camera[2, 2])) == pytest.approx(plan.info["pitch_deg"], abs=0.5)
+    near = planner.plan_look(np.array(STOWED), BASE, point, standoff_m=0.25, pitch_deg=75.0)
+    assert (near.info["standoff_m"], near.info["pitch_deg"]) == (0.25, 75.0)
+
+
+def test_a_move_is_retimed_from_where_the_arm_really_is(planner: ArmPlanner) -> None:
+    plan = planner.plan_open(np.array(STOWED), BASE, _drawer(), 0.2)
+    step = plan.steps[1]
+    assert isinstance(step, Step) and step.waypoints is not None
+    off = step.samples[0] + 0.03
+    again = planner.retime(step, off)
+    assert np.abs(again.samples[0] - off).max() <= np.max(SPEC.column("velocity") * again.dt) + 1e-9
+    assert again.samples[-1] == pytest.approx(step.samples[-1], abs=1e-9)
+    parse_arm_trajectory({"dt": again.dt}, {"samples": again.samples}, SPEC)
+    hold = planner.hold(off)
+    assert hold.samples.shape == (1, 8) and hold.samples[0] == pytest.approx(off)
+
+
+def test_free_moves_keep_the_hand_above_the_surface(planner: ArmPlanner) -> None:
+    plan = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.9), 0.2, surface_z=SURFACE)
+    base = base_transform(BASE)
+    for step in plan.steps:
+        if step.kind == "move" and step.name.startswith("to "):
+            lowest = min(hand_bottom(base @ planner.kin.forward(q), base, planner.body_radius) for q in step.samples)
+            assert lowest >= SURFACE + 0.01
+
+
+def test_an_idle_spot_is_on_the_surface_clear_of_everything_standing_on_it() -> None:
+    xs, ys = np.meshgrid(np.arange(-0.6, 0.6, 0.01), np.arange(-0.4, 0.4, 0.01))
+    table = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.75)])
+    angles = np.linspace(0, 2 * math.pi, 40)
+    can = np.column_stack([0.1 + 0.033 * np.cos(angles), 0.033 * np.sin(angles), np.full(40, 0.8)])
+    flat_thing = np.column_stack([np.full(5, 0.3), np.linspace(-0.1, 0.1, 5), np.full(5, 0.752)])  # not standing up
+    spot = idle_spot(table, [can, flat_thing], 0.035, (0.12, 0.0))
+    assert spot[2] == pytest.approx(0.75)
+    assert np.min(np.linalg.norm(can[:, :2] - spot[:2], axis=1)) >= 0.11 + 0.03 - 1e-9  # the hand's reach
+    assert np.linalg.norm(spot[:2] - [0.12, 0.0]) < 0.2  # and otherwise as near as asked
+    assert -0.6 + 0.065 <= spot[0] <= 0.59 - 0.065 and -0.4 + 0.065 <= spot[1] <= 0.39 - 0.065
+    with pytest.raises(SkillPlanError, match="too small"):
+        idle_spot(table[np.abs(table[:, 0]) < 0.03], [], 0.035, (0.0, 0.0))
+
+
+def test_the_base_stands_square_to_the_front_opposite_the_handle_or_beside_the_hinge() -> None:
+    assert stand_pose(_drawer(x=0.42), (0.0, -0.7, 1.0)) == pytest.approx((0.42, -0.7, math.pi / 2))
+    door = _door()
+    x, y, yaw = stand_pose(door, (1.0, -0.7, math.pi / 2))
+    assert (x, y, yaw) == pytest.approx((0.35 * 0.4, -0.7, math.pi / 2), abs=1e-6)
+    turned = PartGeometry("drawer", np.array([1.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0]))
+    assert stand_pose(turned, (0.2, 0.5, 0.0)) == pytest.approx((0.2, 0.0, 0.0))
+
+
+def test_grasp_pose_of_the_geometry_is_where_the_plan_grasps(planner: ArmPlanner) -> None:
+    geometry = _drawer(height=1.05)
+    plan = planner.plan_open(np.array(READY), BASE, geometry, 0.15)
+    expected = grasp_pose(geometry)
+    got = plan.info["grasp_pose"]
+    assert got[:3, 3] == pytest.approx(expected[:3, 3], abs=1e-9)
+    assert abs(got[:3, 0] @ expected[:3, 0]) > 0.999  # up to the half turn and the tilt about the bar
