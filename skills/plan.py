@@ -424,6 +424,18 @@ class ArmPlanner:
             return builder.finish(skill, info)
         raise SkillPlanError(_best_failure(failures, "look"))
 
+    def plan_joint_move(self, q: np.ndarray, base_pose: Sequence[float], goal: Sequence[float], *,
+                        surface_z: float | None = None, skill: str = "move_joints") -> SkillPlan:
+        """One free joint-space move of lift and arm to ``goal`` (e.g. folding the arm away)."""
+        joints = np.asarray(goal, dtype=float)
+        if joints.shape != (self.kin.dof,) or not np.all(np.isfinite(joints)):
+            raise SkillPlanError(f"goal: expected {self.kin.dof} finite joint values, got {goal!r}")
+        if not self.kin.within_limits(joints):
+            raise SkillPlanError(f"goal: {np.round(joints, 3).tolist()} lies outside the joint limits")
+        builder = _Builder(self, q, base_pose, surface_z)
+        builder.free_move("to the goal", joints, via_ready=False)
+        return builder.finish(skill, {"goal": joints})
+
     def _part(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, start: float, end: float,
               skill: str, surface_z: float | None) -> SkillPlan:
         """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``.

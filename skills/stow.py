@@ -1,0 +1,27 @@
+"""Stow: fold the arm back into the base. The example of a skill added to homebot (see the README).
+
+A skill is a `skills.base.ArmSkill` subclass with a ``skill_name`` and a ``plan`` method that turns
+the arm's state and the blackboard's `SkillTarget` into a `SkillPlan`; the base class sends the
+plan's steps to the world, stays RUNNING while the arm moves, checks the outcome and writes the
+`SkillResult`. One entry point in ``pyproject.toml`` makes ``homebot skills`` list it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skills.base import ArmSkill, SkillTarget
+from skills.plan import ArmPlanner, SkillPlan, SkillPlanError
+
+
+class Stow(ArmSkill):
+    """Fold the arm back into the base (its stowed pose), e.g. before the robot drives on."""
+
+    skill_name = "stow"
+
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+             target: SkillTarget) -> SkillPlan:
+        if planner.stowed is None:
+            raise SkillPlanError("stow: the robot description names no stowed pose")
+        return planner.plan_joint_move(q, base_pose, planner.stowed, surface_z=target.surface_z,
+                                       skill=self.skill_name)
