@@ -16,7 +16,7 @@ import pytest
 
 from agent.bus.session import free_tcp_endpoint
 from agent.config import Config, load_config
-from agent.eqa.answers import StepScores
+from agent.eqa.answers import StepScores, steps_from_records
 from agent.eqa.calibration import (Calibration, CalibrationEpisode, made_with,
                                    read_calibration, shipped_calibration, write_calibration)
 from agent.eqa.stopping import ConformalRule, RelevanceRule, replay
@@ -30,7 +30,7 @@ def _config(*overrides: str) -> Config:
 
 
 def _steps(result: dict) -> list[StepScores]:
-    return [StepScores(s["step"], s["answer_probs"], s["relevance"]) for s in result["step_scores"]]
+    return steps_from_records(result["step_scores"])
 
 
 def _calibration_with_q_hat(config: Config, q_hat: float, n: int = 9) -> Calibration:

@@ -6,6 +6,7 @@ Kept apart from the tree so stopping rules can be tested with plain lists of sco
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -18,6 +19,20 @@ class StepScores:
 
     def best(self) -> str:
         return max(self.answer_probs, key=lambda letter: self.answer_probs[letter])
+
+    def to_record(self) -> dict[str, Any]:
+        """The JSON form kept in result files and calibration files (5 decimals)."""
+        return {"step": self.step, "answer_probs": {k: round(v, 5) for k, v in self.answer_probs.items()},
+                "relevance": round(self.relevance, 5)}
+
+    @classmethod
+    def from_record(cls, record: dict[str, Any]) -> StepScores:
+        return cls(record["step"], record["answer_probs"], record["relevance"])
+
+
+def steps_from_records(records: list[dict[str, Any]]) -> list[StepScores]:
+    """The steps of a recorded episode (`StepScores.to_record` lines), in order."""
+    return [StepScores.from_record(record) for record in records]
 
 
 @dataclass

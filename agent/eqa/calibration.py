@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from agent.config import Config
-from agent.eqa.answers import StepScores
+from agent.eqa.answers import steps_from_records
 from agent.eqa.conformal import conformal_quantile, nonconformity
 from agent.runtime.record import write_json_atomic
 
@@ -76,8 +76,7 @@ class CalibrationEpisode:
 
     @property
     def kappa(self) -> float:
-        steps = [StepScores(s["step"], s["answer_probs"], s["relevance"]) for s in self.step_scores]
-        return nonconformity(steps, self.ground_truth)
+        return nonconformity(steps_from_records(self.step_scores), self.ground_truth)
 
 
 @dataclass(frozen=True)
@@ -188,6 +187,13 @@ def calibration_for(config: Config) -> tuple[Calibration, Path]:
             "--out FILE` and pass --set stop.calibration=FILE, or stop at the budget with --stop budget."
         )
     calibration = read_calibration(path)
+    check_fits(calibration, path, config)
+    return calibration, path
+
+
+def check_fits(calibration: Calibration, path: Path, config: Config) -> None:
+    """Refuse a calibration made with another policy or VLM, naming every difference, unless the
+    config says to accept it."""
     differences = mismatches(calibration.made_with, config)
     if differences and not config.stop.accept_mismatched_calibration:
         listed = "\n  ".join(differences)
@@ -198,4 +204,3 @@ def calibration_for(config: Config) -> tuple[Calibration, Path]:
             "and pass --set stop.calibration=FILE, stop at the budget with --stop budget, "
             "or accept it anyway with --set stop.accept_mismatched_calibration=true."
         )
-    return calibration, path

@@ -14,14 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from agent.eqa.answers import AnswerLog, StepScores
+from agent.eqa.answers import AnswerLog, steps_from_records
 
 TAU_GRID = np.round(np.arange(0.05, 1.0001, 0.05), 2)
 
 
 def answer_after(step_scores: list[dict[str, Any]], k: int) -> str | None:
     """The answer an episode would give if it stopped after its first ``k`` steps."""
-    steps = [StepScores(s["step"], s["answer_probs"], s["relevance"]) for s in step_scores[:k]]
+    steps = steps_from_records(step_scores[:k])
     return AnswerLog(steps).fallback().best() if steps else None
 
 

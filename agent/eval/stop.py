@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from agent.config import Config
-from agent.eqa.answers import StepScores
-from agent.eqa.calibration import Calibration, CalibrationError, mismatches, read_calibration
+from agent.eqa.answers import StepScores, steps_from_records
+from agent.eqa.calibration import Calibration, check_fits, read_calibration
 from agent.eqa.conformal import sequence_set
 from agent.eqa.stopping import (BudgetRule, ConformalRule, EntropyRule, RelevanceRule, StoppingRule,
                                 replay)
@@ -59,7 +59,7 @@ class SweepPoint:
 
 
 def episode_steps(result: dict[str, Any]) -> list[StepScores]:
-    return [StepScores(s["step"], s["answer_probs"], s["relevance"]) for s in result["step_scores"]]
+    return steps_from_records(result["step_scores"])
 
 
 def usable(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -145,11 +145,7 @@ def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: i
                   limit: int | None = None, worlds: list[WorldAddress] | None = None) -> dict[str, Any]:
     """Run the test episodes still missing, replay every rule, and write the CSVs and the figure."""
     calibration = read_calibration(calibration_path)
-    differences = mismatches(calibration.made_with, config)
-    if differences and not config.stop.accept_mismatched_calibration:
-        raise CalibrationError(f"calibration file {calibration_path} was made with another policy or VLM:\n  "
-                               + "\n  ".join(differences)
-                               + "\nEvaluate with the same settings, or set stop.accept_mismatched_calibration=true.")
+    check_fits(calibration, calibration_path, config)
     jobs = full_budget_jobs(suite, config, limit)
     results = usable(run_full_budget(jobs, out_dir / "stop-episodes.jsonl", workers, config, worlds))
     if not results:

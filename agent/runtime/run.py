@@ -153,11 +153,7 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
         snapshot_log.close()
     log_of_steps = writer.get(bb.ANSWER_LOG)
     outcome.extra["steps"] = len(log_of_steps)
-    outcome.extra["step_scores"] = [
-        {"step": s.step, "answer_probs": {k: round(v, 5) for k, v in s.answer_probs.items()},
-         "relevance": round(s.relevance, 5)}
-        for s in log_of_steps.steps
-    ]
+    outcome.extra["step_scores"] = [s.to_record() for s in log_of_steps.steps]
     writer.register_key(bb.PREDICTION_SET, access=py_trees.common.Access.READ)
     outcome.extra["prediction_set"] = writer.get(bb.PREDICTION_SET)
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
