@@ -108,8 +108,11 @@ def _parser() -> argparse.ArgumentParser:
                              help="the five tabletop tasks, ten variants each (homebot suite tabletop)")
     interactive.add_argument("--tasks", default=None, help="comma separated (default: all five)")
     interactive.add_argument("--variants", type=int, default=10, help="variants per task (default 10)")
-    interactive.add_argument("--executor", choices=("symbolic",), default="symbolic",
-                             help="symbolic: perfect perception and skills (the decision logic alone)")
+    interactive.add_argument("--executor", choices=("symbolic", "robot"), default="symbolic",
+                             help="symbolic: perfect perception and skills (the decision logic alone); "
+                                  "robot: the arm in PyBullet, perceiving with its cameras")
+    interactive.add_argument("--workers", type=int, default=1,
+                             help="scenes explored at once, each in its own process and world (default 1)")
     interactive.add_argument("--out", type=Path, default=Path("runs/eval-interactive"),
                              help="results go here; reruns resume")
     interactive.set_defaults(handler=_eval_interactive)
@@ -356,7 +359,7 @@ def _eval_interactive(args: argparse.Namespace) -> int:
 
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
     try:
-        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress)
+        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress, args.workers)
     except ValueError as error:
         print(f"homebot eval interactive: {error}", file=sys.stderr)
         return 2

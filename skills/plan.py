@@ -433,7 +433,7 @@ class ArmPlanner:
         if not self.kin.within_limits(joints):
             raise SkillPlanError(f"goal: {np.round(joints, 3).tolist()} lies outside the joint limits")
         builder = _Builder(self, q, base_pose, surface_z)
-        builder.free_move("to the goal", joints, via_ready=False)
+        builder.free_move("to the goal", joints)
         return builder.finish(skill, {"goal": joints})
 
     def _part(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, start: float, end: float,
@@ -684,7 +684,9 @@ class _Builder:
         return Step("move", name, samples, planner.dt, waypoints, speed, stop_on_contact, tcp_target, part_motion)
 
     def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True) -> None:
-        """A joint-space move to ``goal``, by way of the ready pose when the arm starts stowed.
+        """A joint-space move to ``goal``, by way of the ready pose when the arm starts or ends stowed
+        (the way out of the base and back into it that every skill takes, so folding away from a
+        view into a drawer retraces the way there instead of sweeping through the drawer).
 
         With a known surface the hand must stay `SURFACE_CLEARANCE_M` above it all the way; a
         straight joint-space move that dips lower is replaced by one with the lift raised to the
@@ -697,14 +699,17 @@ class _Builder:
         stowed = planner.stowed is not None and np.abs(self.q - planner.stowed).max() < 0.1
         if via_ready and stowed:
             start.append(planner.ready)
-        routes = [np.array([*start, goal])]
+        end = [goal]
+        if via_ready and planner.stowed is not None and np.abs(goal - planner.stowed).max() < 0.1 and not stowed:
+            end.insert(0, planner.ready)
+        routes = [np.array([*start, *end])]
         lift = planner.lift_index
         if self.surface_z is not None and lift is not None:
             high = planner.kin.upper[lift]
-            over = [start[-1].copy(), goal.copy()]
+            over = [start[-1].copy(), end[0].copy()]
             for q in over:
                 q[lift] = high
-            routes.append(np.array([*start, *over, goal]))
+            routes.append(np.array([*start, *over, *end]))
         target = self.base @ planner.kin.forward(goal)
         low = math.inf
         for waypoints in routes:

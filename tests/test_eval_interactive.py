@@ -29,7 +29,7 @@ def test_rows_per_task_and_a_rerun_redoes_nothing(tmp_path: Path) -> None:
 @pytest.mark.parametrize("tasks, variants, executor, problem", [
     (["shelves"], 1, "symbolic", "--tasks: unknown shelves"),
     (["occlusion"], 11, "symbolic", "--variants: 11"),
-    (["occlusion"], 1, "robot", "--executor: 'robot'"),
+    (["occlusion"], 1, "telepathic", "--executor: 'telepathic'"),
 ])
 def test_bad_options_are_named(tmp_path: Path, tasks, variants, executor, problem) -> None:
     with pytest.raises(ValueError, match=problem):

@@ -85,6 +85,11 @@ class WorldServer:
             self._world = None
             log.info("world under %s stopped", self.keys.namespace)
 
+    @property
+    def world(self) -> World | None:
+        """The world being served (None before `serve` builds it and after it stops)."""
+        return self._world
+
     def _built(self, verb: str) -> World:
         assert self._world is not None  # handlers only run inside serve()
         if not self._world.ready:

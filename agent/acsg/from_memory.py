@@ -7,16 +7,18 @@ object standing in that box is found to block it. All of it is read from the rem
 
 - a handle belongs to its door or drawer, and a door or drawer to its storage piece (the memory
   attaches parts by adjacency);
-- any other thing lies *inside* the smallest remembered box that contains its centre (a storage
-  piece, or a box put over it), else stands *on* the highest thing whose top is just below its
-  bottom and under its centre;
+- any other thing lies *inside* the smallest box that contains its centre: a storage piece's (its
+  carcass and parts together), an open drawer's, a box put over it, or the box a thing moved away
+  filled before it was moved (``vacated``: a cup found where a box was lifted from lay inside the
+  box); else it stands *on* the highest thing whose top is just below its bottom and under its
+  centre (a piece's top counting its parts: a chest whose front is all drawers);
 - a drawer sweeps its front's box pulled out by ``drawer_pull_m``; a door sweeps the square in
   front of it whose side is the door's width (the quarter circle it swings through, boxed).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -30,16 +32,19 @@ SUPPORT_GAP_M = 0.03  # a thing stands on a surface whose top is at most this fa
 INSIDE_MARGIN_M = 0.01
 
 
-def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pull_m: float = 0.25) -> list[Detection]:
+def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pull_m: float = 0.25,
+                      vacated: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None) -> list[Detection]:
     """One detection per live remembered instance, with its relation and, for parts, their swept box.
 
     ``toward`` is where the robot looks from (the camera position), which orients front normals.
+    ``vacated``: instance id -> the (lo, hi) box it filled before it was moved away.
     """
     live = memory.live()
     by_id = {inst.id: inst for inst in live}
+    boxes = {inst.id: _family_bounds(inst, by_id) for inst in live}
     detections = []
     for inst in live:
-        parent, relation = _relation(inst, live, by_id)
+        parent, relation = _relation(inst, live, by_id, boxes, vacated or {})
         hints = {}
         if inst.label in PARTS:
             swept = _swept_box(memory, inst, by_id, np.asarray(toward, dtype=float), drawer_pull_m)
@@ -51,37 +56,61 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
     return detections
 
 
-def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance]) -> tuple[int | None, str | None]:
+Box = tuple[np.ndarray, np.ndarray]
+
+
+def _family_bounds(inst: Instance, by_id: dict[int, Instance]) -> Box:
+    """The box around an instance and its live parts, recursively (a piece with its doors and drawers)."""
+    los, his = [], []
+    todo, seen = [inst.id], set()
+    while todo:
+        current = by_id.get(todo.pop())
+        if current is None or current.id in seen:
+            continue
+        seen.add(current.id)
+        lo, hi = current.bounds
+        los.append(lo)
+        his.append(hi)
+        todo.extend(current.children)
+    return np.min(los, axis=0), np.max(his, axis=0)
+
+
+def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], boxes: Mapping[int, Box],
+              vacated: Mapping[int, Box]) -> tuple[int | None, str | None]:
     if inst.label in (*PARTS, HANDLE):
         return (inst.parent, "belongs") if inst.parent in by_id else (None, None)
     centre = inst.centroid
-    lo, _ = inst.bounds
-    containers = [other for other in live if other.id != inst.id and other.label not in (*PARTS, HANDLE)
-                  and _contains(other, centre) and _volume(other) > _volume(inst)]
-    if containers:
-        return min(containers, key=_volume).id, "inside"
+    lo, _ = boxes[inst.id]
+    own = _volume(boxes[inst.id])
+    containers = [(box, other_id) for other_id, box in vacated.items() if other_id != inst.id]
+    containers += [(boxes[other.id], other.id) for other in live
+                   if other.id != inst.id and other.label not in ("door", HANDLE)]
+    inside = [(_volume(box), other_id) for box, other_id in containers if _contains(box, centre) and _volume(box) > own]
+    if inside:
+        return min(inside)[1], "inside"
     supports = []
     for other in live:
         if other.id == inst.id or other.label in (HANDLE,):
             continue
-        other_lo, other_hi = other.bounds
+        other_lo, other_hi = boxes[other.id]
         below = 0.0 <= lo[2] - other_hi[2] + SUPPORT_GAP_M / 2 <= SUPPORT_GAP_M * 1.5
         under = np.all(other_lo[:2] <= centre[:2]) and np.all(centre[:2] <= other_hi[:2])
         if below and under:
             supports.append(other)
     if supports:
-        top = max(supports, key=lambda other: other.bounds[1][2])
+        top = max(supports, key=lambda other: boxes[other.id][1][2])
         return (top.parent, "on") if top.label in PARTS and top.parent in by_id else (top.id, "on")
     return None, None
 
 
-def _contains(box: Instance, point: np.ndarray) -> bool:
-    lo, hi = box.bounds
+def _contains(box: Box, point: np.ndarray) -> bool:
+    lo, hi = box
     return bool(np.all(lo + INSIDE_MARGIN_M <= point) and np.all(point <= hi - INSIDE_MARGIN_M))
 
 
-def _volume(inst: Instance) -> float:
-    return float(np.prod(np.maximum(inst.extent, 1e-3)))
+def _volume(box: Box) -> float:
+    lo, hi = box
+    return float(np.prod(np.maximum(hi - lo, 1e-3)))
 
 
 def _swept_box(memory: InstanceMemory, part: Instance, by_id: dict[int, Instance], toward: np.ndarray,

@@ -202,14 +202,15 @@ class EpisodeMetrics:
 
 def episode_metrics(explored: ACSG, truth: ACSG, start_positions: Mapping[str, Any],
                     final_positions: Mapping[str, Any], start_states: Mapping[str, float],
-                    final_states: Mapping[str, float], timeout_s: float = 10.0) -> EpisodeMetrics:
-    """Every Table I metric of one exploration."""
+                    final_states: Mapping[str, float], timeout_s: float = 10.0,
+                    tolerance_m: float = 0.01) -> EpisodeMetrics:
+    """Every Table I metric of one exploration; a thing within ``tolerance_m`` of its start is back."""
     ged = edit_distance(explored, truth, timeout_s)
     return EpisodeMetrics(
         success=ged.value == 0.0 or is_success(explored, truth),
         object_recovery=object_recovery(explored, truth),
-        state_recovered=scene_restored(start_positions, final_positions, start_states, final_states),
-        position_recovery=position_recovery(start_positions, final_positions),
+        state_recovered=scene_restored(start_positions, final_positions, start_states, final_states, tolerance_m),
+        position_recovery=position_recovery(start_positions, final_positions, tolerance_m),
         state_recovery=state_recovery(start_states, final_states),
         unexplored_space=unexplored_space(truth, explored),
         graph_edit_distance=ged.value,

@@ -9,14 +9,19 @@ The executor says what perceives and acts:
 - ``symbolic``: the symbolic tabletop of `agent.acsg.symbolic`, i.e. perfect perception and skills
   that never fail. It measures the decision logic and the action stack alone: an upper bound for
   the robot, and the reference a robot run is read against.
+- ``robot``: the robot in PyBullet (`agent.eval.robot_tabletop`): head and wrist cameras fused in
+  the instance memory, the arm skills planned from them. Scenes run in ``workers`` processes,
+  each with its own world.
 """
 
 from __future__ import annotations
 
 import json
+import multiprocessing
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -29,7 +34,7 @@ from agent.acsg.symbolic import SymbolicScene
 from agent.eval.runner import read_results
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
 
-EXECUTORS = ("symbolic",)
+EXECUTORS = ("symbolic", "robot")
 #: Success rates of RoboEXP's Table I, per task, for the table printed beside ours.
 PAPER_SUCCESS = {"drawer-only": 0.9, "door-only": 0.9, "drawer-door": 0.7, "recursive": 0.7, "occlusion": 0.5}
 COLUMNS = ("success", "object_recovery", "state_recovered", "unexplored_space", "graph_edit_distance")
@@ -47,9 +52,21 @@ def run_symbolic(task: str, seed: int) -> dict[str, Any]:
             "seconds": round(time.monotonic() - started, 3)}
 
 
+def run_scene(executor: str, task: str, seed: int) -> dict[str, Any]:
+    """One result row: the scene explored by ``executor``."""
+    if executor == "robot":
+        from agent.eval.robot_tabletop import run_robot  # PyBullet and the arm only when asked for
+
+        metrics = run_robot(task, seed)
+    else:
+        metrics = run_symbolic(task, seed)
+    return {"task": task, "seed": seed, "executor": executor, **metrics}
+
+
 def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: int = VARIANTS,
                          executor: str = "symbolic",
-                         progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> dict[str, Any]:
+                         progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+                         workers: int = 1) -> dict[str, Any]:
     """Run the scenes not yet in ``<out_dir>/interactive-results.jsonl``; return the per-task table."""
     tasks = list(tasks)
     unknown = sorted(set(tasks) - set(TASKS))
@@ -59,13 +76,14 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
         raise ValueError(f"--executor: {executor!r} is not one of {', '.join(EXECUTORS)}")
     if not 1 <= variants <= VARIANTS:
         raise ValueError(f"--variants: {variants} must be 1..{VARIANTS}")
+    if workers < 1:
+        raise ValueError(f"--workers: {workers} must be at least 1")
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "interactive-results.jsonl"
     done = {(r["task"], r["seed"], r["executor"]) for r in read_results(path)}
     todo = [(task, seed) for task in tasks for seed in range(variants) if (task, seed, executor) not in done]
     with open(path, "a", encoding="utf-8") as out:
-        for number, (task, seed) in enumerate(todo, start=1):
-            row = {"task": task, "seed": seed, "executor": executor, **run_symbolic(task, seed)}
+        for number, row in enumerate(_rows(executor, todo, workers), start=1):
             out.write(json.dumps(row) + "\n")
             out.flush()
             if progress:
@@ -73,6 +91,19 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
     wanted = {(task, seed) for task in tasks for seed in range(variants)}
     rows = [r for r in read_results(path) if r["executor"] == executor and (r["task"], r["seed"]) in wanted]
     return {"table": table(rows, tasks), "results": str(path), "n": len(rows)}
+
+
+def _rows(executor: str, todo: list[tuple[str, int]], workers: int) -> Iterator[dict[str, Any]]:
+    """Result rows as the scenes finish, in worker processes when there are several."""
+    if workers == 1 or len(todo) <= 1:
+        for task, seed in todo:
+            yield run_scene(executor, task, seed)
+        return
+    context = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked Zenoh or PyBullet state
+    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context) as pool:
+        futures = [pool.submit(run_scene, executor, task, seed) for task, seed in todo]
+        for future in as_completed(futures):
+            yield future.result()
 
 
 def table(rows: list[dict[str, Any]], tasks: list[str]) -> dict[str, dict[str, tuple[float, float]]]:

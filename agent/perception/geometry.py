@@ -275,7 +275,7 @@ def opening_waypoints(geometry: PartGeometry, amount: float, n: int | None = Non
     start = grasp_pose(geometry)
     poses = []
     for value in np.linspace(0.0, amount, steps + 1):
-        poses.append(_move(geometry, float(value)) @ start)
+        poses.append(part_motion(geometry, float(value)) @ start)
     return poses
 
 
@@ -289,15 +289,32 @@ def closing_waypoints(geometry: PartGeometry, amount: float, n: int | None = Non
 
 def moved_geometry(geometry: PartGeometry, amount: float) -> PartGeometry:
     """The geometry of the part after opening it by ``amount``: handle and normal carried along."""
-    move = _move(geometry, amount)
+    move = part_motion(geometry, amount)
     rotation = move[:3, :3]
     return PartGeometry(geometry.kind, move[:3, :3] @ geometry.handle_point + move[:3, 3],
                         rotation @ geometry.handle_axis, rotation @ geometry.normal,
                         geometry.hinge_point, geometry.hinge_axis)
 
 
-def _move(geometry: PartGeometry, amount: float) -> np.ndarray:
-    """4x4 rigid motion of the part opened by ``amount`` (world frame, applied on the left)."""
+def opening_of(geometry: PartGeometry, handle_point: np.ndarray) -> float:
+    """How far the part stands open when its handle is seen at ``handle_point``: metres along the
+    normal for a drawer, radians about the hinge axis for a door (the inverse of `part_motion` for
+    the handle). What a skill's own account of the motion cannot tell: a drawer pulled past the end
+    of its travel stops there while the hand pulls on, and only a look says where it stopped."""
+    seen = np.asarray(handle_point, dtype=float) - geometry.handle_point
+    if geometry.kind == "drawer":
+        return float(seen @ geometry.normal)
+    assert geometry.hinge_point is not None and geometry.hinge_axis is not None
+    axis = _unit(geometry.hinge_axis, "hinge_axis")
+    before = geometry.handle_point - geometry.hinge_point
+    after = np.asarray(handle_point, dtype=float) - geometry.hinge_point
+    before, after = before - (before @ axis) * axis, after - (after @ axis) * axis
+    return float(math.atan2(np.cross(before, after) @ axis, before @ after))
+
+
+def part_motion(geometry: PartGeometry, amount: float) -> np.ndarray:
+    """4x4 rigid motion of the part opened by ``amount`` (world frame, applied on the left): what
+    carries the closed part's points, handle and anything fixed to it to where they are now."""
     move = np.eye(4)
     if geometry.kind == "drawer":
         move[:3, 3] = amount * geometry.normal

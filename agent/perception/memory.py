@@ -54,7 +54,7 @@ from scipy.spatial import cKDTree
 
 from agent.mapping.camera import Intrinsics
 from agent.perception.frames import Detection, FrameLabel, check_frame, check_labels, detect, frame_labels
-from agent.perception.voxels import centres, near_count, union
+from agent.perception.voxels import centres, near_count, pack, union, voxel_indices
 
 #: Categories of storage furniture, as the world labels them (worlds.vocabulary.STORAGE_CATEGORIES;
 #: the agent does not import the world, so the words are repeated here).
@@ -120,6 +120,7 @@ class Instance:
     first_seen: int
     last_seen: int
     hint: int | None = None
+    frames: set[int] = field(default_factory=set)  # the frames it was detected in
     parent: int | None = None
     children: list[int] = field(default_factory=list)
     gone: bool = False
@@ -239,10 +240,12 @@ class InstanceMemory:
                 created.append(self._create(detection).id)
                 continue
             target = self.instances[matches[0]]
-            self._absorb_detection(target, detection)
             for other in matches[1:]:
+                if self.instances[other].frames & (target.frames | {self.frame}):
+                    continue  # seen apart in one frame: two things, however close (stacked drawers)
                 absorbed[other] = target.id
                 self._absorb_instance(target, self.instances[other])
+            self._absorb_detection(target, detection)
             updated.append(target.id)
         seen = set(created) | set(updated)
         self._attach_parts(seen)
@@ -267,6 +270,32 @@ class InstanceMemory:
             if target.parent is not None and target.parent in self.instances:
                 self._set_parent(target, target.parent)
         return target
+
+    def move(self, instance_id: int, motion: np.ndarray) -> list[int]:
+        """Carry an instance and its parts (children, recursively) by the rigid ``motion`` (4x4,
+        world frame, applied on the left); returns the ids moved.
+
+        For the caller that moved the thing and knows how (a skill that pulled a drawer out by
+        0.2 m, put a cup down elsewhere): the next view then finds it where it now is and merges
+        with it, instead of reporting a new thing there and the old one gone. Voxel centres are
+        moved and quantised again; voxels landing in one keep the sum of their hits.
+        """
+        motion = np.asarray(motion, dtype=float)
+        if motion.shape != (4, 4) or not np.all(np.isfinite(motion)):
+            raise ValueError(f"motion: a finite 4x4 transform is needed, got shape {motion.shape}")
+        moved, todo = [], [self.get(instance_id).id]
+        while todo:
+            inst = self.instances[todo.pop()]
+            if inst.id in moved:
+                continue
+            if len(inst.keys):
+                points = inst.points() @ motion[:3, :3].T + motion[:3, 3]
+                keys, inverse = np.unique(pack(voxel_indices(points, inst.voxel_m)), return_inverse=True)
+                inst.keys = keys
+                inst.hits = np.bincount(inverse, weights=inst.hits, minlength=len(keys)).astype(np.int32)
+            moved.append(inst.id)
+            todo.extend(c for c in inst.children if c in self.instances)
+        return moved
 
     # --- stale voxels ------------------------------------------------------------------------
 
@@ -360,7 +389,7 @@ class InstanceMemory:
 
     def _create(self, detection: Detection) -> Instance:
         inst = Instance(self._next_id, detection.label, detection.colour, detection.keys, detection.hits,
-                        self.config.voxel_m, self.frame, self.frame, detection.hint)
+                        self.config.voxel_m, self.frame, self.frame, detection.hint, {self.frame})
         self.instances[inst.id] = inst
         self._next_id += 1
         return inst
@@ -368,6 +397,7 @@ class InstanceMemory:
     def _absorb_detection(self, inst: Instance, detection: Detection) -> None:
         inst.keys, inst.hits = union(inst.keys, inst.hits, detection.keys, detection.hits)
         inst.last_seen, inst.hint = self.frame, detection.hint
+        inst.frames.add(self.frame)
         if detection.colour is not None:
             inst.colour = detection.colour
 
@@ -375,6 +405,7 @@ class InstanceMemory:
         """Fold ``other`` into ``target``: voxels, children; ``other`` is removed and aliased."""
         target.keys, target.hits = union(target.keys, target.hits, other.keys, other.hits)
         target.first_seen = min(target.first_seen, other.first_seen)
+        target.frames |= other.frames
         for child_id in other.children:
             self.instances[child_id].parent = target.id
             if child_id not in target.children:
@@ -415,8 +446,25 @@ class InstanceMemory:
                 count = int(np.isfinite(distance).sum())
                 if count > best_count:
                     best, best_count = candidate.id, count
+            if best is None and not has_parent:
+                best = self._beneath_footprint(inst, [c for c in live.values() if c.label in allowed])
             if best is not None and best != inst.parent:
                 self._set_parent(inst, best)
+
+    def _beneath_footprint(self, part: Instance, candidates: list[Instance]) -> int | None:
+        """The candidate whose footprint (x, y box, grown by ``part_gap_m``) holds the part's centre,
+        nearest first: the parent of a drawer low on a chest of drawers whose carcass shows only
+        above and beside the fronts, too far from this drawer for adjacency to find."""
+        gap = self.config.part_gap_m
+        centre = part.centroid[:2]
+        holding = []
+        for candidate in candidates:
+            if candidate.id == part.id or not len(candidate.keys) or _is_ancestor(self, part.id, candidate.id):
+                continue
+            lo, hi = candidate.bounds
+            if np.all(lo[:2] - gap <= centre) and np.all(centre <= hi[:2] + gap):
+                holding.append((float(np.linalg.norm(candidate.centroid[:2] - centre)), candidate.id))
+        return min(holding)[1] if holding else None
 
     def _set_parent(self, inst: Instance, parent_id: int) -> None:
         if inst.parent is not None and inst.parent in self.instances:

@@ -1,0 +1,310 @@
+"""The robot as Algorithm 1 sees it: a `Perception` and a `SkillExecutor` over the world link.
+
+Perception is the head camera, seen from where the robot started (the whole table in view), and
+the wrist camera looking into whatever a skill has just opened; both frames are fused in one
+`InstanceMemory`, whose instances become the explorer's detections (`memory_detections`). The
+memory's ids are the ACSG's: the simulator's segmentation ids are never used to act.
+
+Each primitive is turned into a `SkillTarget` from what the memory holds, and the skill runs as a
+py_trees behaviour (`skills.base.run_skill`) while this object waits:
+
+- open a door or drawer: the part's geometry from its handle (`handle_geometry`), the base slid to
+  the part's `stand_pose`, a second look from there to refine the geometry, the skill; then the
+  wrist camera into the opening and the arm stowed again;
+- close it: the geometry and opening remembered from the open, from the same stand;
+- pick away: the base level with the object, a free spot on the surface it stands on
+  (`idle_spot`, towards the robot), the grasp point on top; pick back: from where it was put down
+  to where it was.
+
+What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled out, a door swung,
+a cup put down elsewhere keep their identity, so the graph gains what was revealed and nothing
+else. The box a thing filled before it was picked away is kept while it is away: what is found
+there lay inside it (the Matryoshka's smaller doll). Everything a skill reports is kept in
+`skill_log` for timing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from agent.acsg.from_memory import Box, memory_detections
+from agent.acsg.interfaces import Detection, SkillCall, SkillResult
+from agent.bus.rpc import QueryFailed
+from agent.observation import Observation
+from agent.perception.frames import detect, frame_labels
+from agent.perception.geometry import (
+    GeometryError,
+    PartGeometry,
+    handle_geometry,
+    opening_of,
+    part_motion,
+    top_grasp_point,
+)
+from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.voxels import centres
+from agent.runtime.world_link import WorldLink
+from skills import base as skill_base
+from skills.plan import SkillPlanError, idle_spot, stand_pose
+from skills.primitives import PRIMITIVES
+from skills.stow import Stow
+
+SURFACE_LABELS = ("table", "counter")
+#: A handle seen this close to where a skill says it left it is that handle.
+SEEN_HANDLE_M = 0.08
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    """``look_inside``: the kinds of part (door, drawer) to look into with the wrist camera once
+    open; the head camera sees into the rest from the start pose. A drawer's tray is best seen from
+    just above it; the way to a view behind an open door passes the door itself, which the arm
+    would push shut again. ``idle_toward_robot_m``: how far from the object, towards the robot,
+    the idle spot is sought first."""
+
+    skill_timeout_s: float = 120.0
+    look_inside: tuple[str, ...] = ("drawer",)
+    idle_toward_robot_m: float = 0.2
+
+
+@dataclass(frozen=True)
+class _Opened:
+    geometry: PartGeometry  # as seen closed
+    amount: float  # how far it stands open
+    stand: tuple[float, float, float]
+    look_point: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Away:
+    grasp_point: np.ndarray  # its top grasp point where it stood
+    placed_point: np.ndarray  # where that point was put down
+    extent: np.ndarray
+    stand_x: float
+
+
+@dataclass
+class Robot:
+    """`Perception` and `SkillExecutor` of the robot behind ``link``; see the module docstring."""
+
+    link: WorldLink
+    config: RobotConfig = field(default_factory=RobotConfig)
+    memory: InstanceMemory = field(default_factory=InstanceMemory)
+
+    def __post_init__(self) -> None:
+        self.home: tuple[float, float, float] | None = None
+        self.opened: dict[int, _Opened] = {}
+        self.away: dict[int, _Away] = {}
+        self.vacated: dict[int, Box] = {}
+        self.skill_log: list[skill_base.SkillResult] = []
+        self.notes: list[str] = []
+        self._eye = np.zeros(3)
+
+    # ---- Perception ---------------------------------------------------------------------------
+    def observe(self) -> list[Detection]:
+        """Back to the start pose, one head frame into the memory; the memory's detections."""
+        if self.home is not None:
+            try:
+                self._drive(self.home)
+            except SkillPlanError as error:  # look from where it stands rather than not at all
+                self.notes.append(f"observe: {error}")
+        self._look("head")
+        return memory_detections(self.memory, self._eye, vacated=self.vacated)
+
+    # ---- SkillExecutor ------------------------------------------------------------------------
+    def execute(self, call: SkillCall) -> SkillResult:
+        """Run one exploration primitive on the remembered instance ``call.instance``."""
+        handlers = {"open_door": self._open, "open_drawer": self._open, "close_door": self._close,
+                    "close_drawer": self._close, "pick_away": self._pick_away, "pick_back": self._pick_back}
+        handler = handlers.get(call.primitive)
+        if handler is None:
+            return SkillResult(False, f"{call.primitive}: not an exploration primitive ({', '.join(handlers)})")
+        try:
+            instance = self.memory.get(int(call.instance))  # type: ignore[arg-type]
+        except (KeyError, TypeError, ValueError):
+            return SkillResult(False, f"{call.primitive}: {call.target} is no instance the robot remembers")
+        try:
+            return handler(call, instance)
+        except (GeometryError, SkillPlanError, QueryFailed, KeyError) as error:
+            return SkillResult(False, f"{call.primitive} {instance.label} {instance.id}: {error}")
+
+    # ---- doors and drawers --------------------------------------------------------------------
+    def _open(self, call: SkillCall, part: Instance) -> SkillResult:
+        if self.home is None:
+            raise SkillPlanError("the robot has not looked yet")
+        handle = self._handle(call, part)
+        geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
+        stand = stand_pose(geometry, self.home)
+        self._drive(stand)
+        self._look("head")
+        geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
+        closed_centre = part.centroid
+        result = self._skill(call.primitive, skill_base.SkillTarget(
+            geometry=geometry, surface_z=self._surface_z(), label=f"{part.label} {part.id}"))
+        if result.achieved is None:
+            return SkillResult(False, result.reason)
+        amount = self._seen_opening(geometry, part, result.achieved)
+        if not result.ok:
+            self.opened[part.id] = _Opened(geometry, amount, stand, closed_centre)
+            return SkillResult(False, result.reason)
+        look = self._look_point(geometry, part, amount, closed_centre)
+        self.opened[part.id] = _Opened(geometry, amount, stand, look)
+        if geometry.kind in self.config.look_inside:
+            self._look_into(look)
+        return SkillResult(True)
+
+    def _seen_opening(self, geometry: PartGeometry, part: Instance, reported: float) -> float:
+        """How far the part stands open by a head-camera look (`opening_of` the handle seen nearest
+        to where the skill says it left it), the skill's figure when no handle is seen there; the
+        memory is told the part moved that far, then given the frame."""
+        observation = self._frame("head")
+        expected = (part_motion(geometry, reported) @ np.append(geometry.handle_point, 1.0))[:3]
+        cfg = self.memory.config
+        handles = [centres(d.keys, cfg.voxel_m).mean(axis=0)
+                   for d in detect(observation.depth, observation.segmentation, frame_labels(observation.labels),
+                                   observation.intrinsics, observation.camera_to_world, cfg.voxel_m, cfg.min_pixels,
+                                   cfg.max_depth_m) if d.label == "handle"]
+        near = [h for h in handles if np.linalg.norm(h - expected) <= SEEN_HANDLE_M]
+        amount = reported
+        if near:
+            amount = opening_of(geometry, min(near, key=lambda h: float(np.linalg.norm(h - expected))))
+        if abs(amount) > 0:
+            self.memory.move(part.id, part_motion(geometry, amount))
+        self.memory.integrate(observation)
+        return amount
+
+    def _close(self, call: SkillCall, part: Instance) -> SkillResult:
+        opened = self.opened.get(part.id)
+        if opened is None:
+            return SkillResult(False, f"{part.label} {part.id} was not opened by this robot")
+        self._drive(opened.stand)
+        result = self._skill(call.primitive, skill_base.SkillTarget(
+            geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(),
+            label=f"{part.label} {part.id}"))
+        left = opened.amount if result.achieved is None else result.achieved
+        motion = part_motion(opened.geometry, left) @ np.linalg.inv(part_motion(opened.geometry, opened.amount))
+        self.memory.move(part.id, motion)
+        if not result.ok:
+            self.opened[part.id] = _Opened(opened.geometry, left, opened.stand, opened.look_point)
+            return SkillResult(False, result.reason)
+        del self.opened[part.id]
+        return SkillResult(True)
+
+    def _handle(self, call: SkillCall, part: Instance) -> int:
+        named = call.params.get("handle")
+        if isinstance(named, str) and named.startswith("o") and named[1:].isdigit():
+            return self.memory.get(int(named[1:])).id
+        handles = [c for c in part.children if self.memory.get(c).label == "handle"]
+        if not handles:
+            raise GeometryError(f"{part.label} {part.id} has no handle the robot has seen")
+        return handles[0]
+
+    def _look_point(self, geometry: PartGeometry, part: Instance, amount: float, closed_centre: np.ndarray
+                    ) -> np.ndarray:
+        """Where the wrist camera looks after opening: into a drawer's tray, or behind a door."""
+        piece = self.memory.get(part.parent) if part.parent is not None else part
+        lo, hi = piece.bounds
+        depth = float(abs(np.asarray(geometry.normal) @ (hi - lo)))
+        depth = min(max(depth, 0.15), 0.4)
+        if geometry.kind == "drawer":
+            return geometry.handle_point + (amount - depth / 2) * geometry.normal - np.array([0.0, 0.0, 0.03])
+        return closed_centre - (depth / 2) * geometry.normal
+
+    def _look_into(self, point: np.ndarray) -> None:
+        """The wrist camera at ``point``, its frame into the memory, the arm folded away again. A
+        view that cannot be reached is skipped: the head camera saw what it could."""
+        looked = self._skill("move_camera", skill_base.SkillTarget(look_point=point, surface_z=self._surface_z()))
+        if looked.ok:
+            self._look("wrist")
+        self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=self._surface_z()))
+
+    # ---- picks ----------------------------------------------------------------------------------
+    def _pick_away(self, call: SkillCall, obj: Instance) -> SkillResult:
+        if self.home is None:
+            raise SkillPlanError("the robot has not looked yet")
+        points = obj.points()
+        top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
+        stand_x = float(top[0])
+        self._drive((stand_x, self.home[1], self.home[2]))
+        surface = self._surface()
+        if surface is None:
+            raise SkillPlanError("no table or counter in memory to put the object down on")
+        others = [inst.points() for inst in self.memory.live() if inst.id != surface.id]
+        toward = np.asarray(self.home[:2]) - top[:2]
+        near = top[:2] + self.config.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
+        spot = idle_spot(surface.points(), others, float(max(extent[:2])) / 2, near)
+        place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
+        result = self._skill(call.primitive, skill_base.SkillTarget(
+            object_point=top, object_extent=extent, place_point=place, surface_z=float(spot[2]),
+            label=f"{obj.label} {obj.id}"))
+        if not result.ok:
+            return SkillResult(False, result.reason)
+        self.memory.move(obj.id, _translation(place - top))
+        self.away[obj.id] = _Away(top, place, extent, stand_x)
+        self.vacated[obj.id] = box
+        return SkillResult(True)
+
+    def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
+        away = self.away.get(obj.id)
+        if away is None:
+            return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
+        assert self.home is not None  # set by the look before the pick away
+        self._drive((away.stand_x, self.home[1], self.home[2]))
+        points = obj.points()
+        now = top_grasp_point(points) if len(points) else away.placed_point
+        result = self._skill(call.primitive, skill_base.SkillTarget(
+            object_point=now, object_extent=away.extent, place_point=away.grasp_point,
+            surface_z=self._surface_z(), label=f"{obj.label} {obj.id}"))
+        if not result.ok:
+            return SkillResult(False, result.reason)
+        self.memory.move(obj.id, _translation(away.grasp_point - now))
+        del self.away[obj.id]
+        self.vacated.pop(obj.id, None)
+        return SkillResult(True)
+
+    # ---- the body -------------------------------------------------------------------------------
+    def _skill(self, name: str, target: skill_base.SkillTarget) -> skill_base.SkillResult:
+        skill = PRIMITIVES.get(name) or (Stow if name == Stow.skill_name else None)
+        if skill is None:
+            raise SkillPlanError(f"no skill named {name!r}")
+        result = skill_base.run_skill(skill, self.link, target, timeout_s=self.config.skill_timeout_s)
+        self.skill_log.append(result)
+        if not result.ok and skill is not Stow and (result.steps_done or result.execution_s > 0):
+            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=target.surface_z))  # out of the way
+        return result
+
+    def _look(self, camera: str) -> Observation:
+        observation = self._frame(camera)
+        self.memory.integrate(observation)
+        return observation
+
+    def _frame(self, camera: str) -> Observation:
+        observation = Observation.from_message(self.link.call("observe", {"camera": camera}))
+        if camera == "head":
+            self._eye = observation.camera_to_world[:3, 3].copy()
+            if self.home is None:
+                self.home = tuple(float(v) for v in observation.base_pose)  # type: ignore[assignment]
+        return observation
+
+    def _drive(self, pose: tuple[float, float, float]) -> None:
+        reply: dict[str, Any] = self.link.call("move_base", {"path": [[pose[0], pose[1]]], "yaw": pose[2]}).meta
+        if not reply.get("reached"):
+            raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
+                                 f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")
+
+    def _surface(self) -> Instance | None:
+        surfaces = [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
+        return max(surfaces, key=lambda inst: inst.voxel_count, default=None)
+
+    def _surface_z(self) -> float | None:
+        surface = self._surface()
+        return None if surface is None else float(np.percentile(surface.points()[:, 2], 99))
+
+
+def _translation(offset: np.ndarray) -> np.ndarray:
+    motion = np.eye(4)
+    motion[:3, 3] = offset
+    return motion
