@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import json
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from agent.config import Config, load_config
 from agent.runtime.run import RunRequest, run_episode
@@ -63,8 +66,29 @@ def dump(report: dict[str, Any]) -> str:
     return json.dumps(report, indent=2)
 
 
-def bench_skills(n: int = 100, seed: int = 0) -> dict[str, Any]:
-    """IK solve and trajectory computation times on the robot's own URDF and joint limits."""
+def bench_skills(n: int = 100, seed: int = 0, scenes: Sequence[tuple[str, int]] = ()) -> dict[str, Any]:
+    """IK solve and trajectory computation times on the robot's own URDF and joint limits; with
+    ``scenes`` (tabletop task, variant), the robot explores each and every skill run is timed."""
+    report = _bench_kinematics(n, seed)
+    if scenes:
+        from agent.eval.robot_tabletop import run_robot
+
+        runs = []
+        for task, variant in scenes:
+            runs += run_robot(task, variant)["skill_times"]
+        report["scenes"] = [f"{task}:{variant}" for task, variant in scenes]
+        report["per_skill"] = {
+            name: {"runs": len(rows), "ok": sum(r["ok"] for r in rows),
+                   "planning_ms_median": float(np.median([r["planning_ms"] for r in rows])),
+                   "execution_s_median": float(np.median([r["execution_s"] for r in rows])),
+                   "wall_s_median": float(np.median([r["wall_s"] for r in rows])),
+                   "wall_s_max": float(np.max([r["wall_s"] for r in rows]))}
+            for name in sorted({r["skill"] for r in runs}) for rows in [[r for r in runs if r["skill"] == name]]
+        }
+    return report
+
+
+def _bench_kinematics(n: int, seed: int) -> dict[str, Any]:
     from skills.bench_arm import bench_arm
     from skills.trajectory import JointLimits
     from worlds.robot import CameraConfig
@@ -87,4 +111,16 @@ def format_skills_table(report: dict[str, Any]) -> str:
         f"trajectory (Ruckig, {report['trajectory_waypoints']} waypoints, dt {report['trajectory_dt']} s)  "
         f"median {report['trajectory_ms_median']:.2f} ms, p95 {report['trajectory_ms_p95']:.2f} ms to compute; "
         f"{report['trajectory_s_median']:.2f} s to run",
+        *_per_skill_lines(report),
     ])
+
+
+def _per_skill_lines(report: dict[str, Any]) -> list[str]:
+    if "per_skill" not in report:
+        return []
+    lines = [f"skills while exploring {', '.join(report['scenes'])} (median; wall = planning + running + checks)",
+             f"{'skill':<14}{'runs':>6}{'ok':>5}{'planning ms':>13}{'running s':>11}{'wall s':>9}{'max wall s':>12}"]
+    for name, row in report["per_skill"].items():
+        lines.append(f"{name:<14}{row['runs']:>6}{row['ok']:>5}{row['planning_ms_median']:>13.0f}"
+                     f"{row['execution_s_median']:>11.2f}{row['wall_s_median']:>9.2f}{row['wall_s_max']:>12.2f}")
+    return lines

@@ -15,3 +15,4 @@ STOP_DECISION = "stop_decision"  # agent.eqa.stopping.StopDecision once the stop
 PREDICTION_SET = "prediction_set"  # list[str], the running conformal set (cp rule only, else None)
 Q_HAT = "q_hat"  # float, the calibrated conformal threshold q̂ (cp rule only, else None)
 EPSILON = "epsilon"  # float, the miscoverage ε the user accepts (cp rule only, else None)
+ACTS = "acts"  # list[dict], every time the robot opened (or tried to open) storage to look inside

@@ -133,6 +133,9 @@ def _parser() -> argparse.ArgumentParser:
     arm = benches.add_parser("skills", help="IK and trajectory computation times of the arm")
     arm.add_argument("--n", type=int, default=100, help="random target poses (default 100)")
     arm.add_argument("--seed", type=int, default=0)
+    arm.add_argument("--scenes", default="door-only:0,drawer-only:0",
+                     help="tabletop TASK:VARIANT explored by the robot to time every skill, comma separated "
+                          "(default door-only:0,drawer-only:0; 'none' for kinematics only)")
     arm.add_argument("--json", action="store_true", help="print the figures as JSON")
     arm.set_defaults(handler=_bench_skills)
     world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
@@ -400,9 +403,31 @@ def _bench_skills(args: argparse.Namespace) -> int:
     if args.n < 1:
         print(f"homebot bench skills: --n must be at least 1, got {args.n}", file=sys.stderr)
         return 2
-    report = bench_skills(args.n, args.seed)
+    try:
+        scenes = _tabletop_scenes(args.scenes)
+    except ValueError as error:
+        print(f"homebot bench skills: --scenes: {error}", file=sys.stderr)
+        return 2
+    report = bench_skills(args.n, args.seed, scenes)
     print(dump(report) if args.json else format_skills_table(report))
     return 0
+
+
+def _tabletop_scenes(text: str) -> list[tuple[str, int]]:
+    """``"door-only:0,drawer-only:3"`` -> [("door-only", 0), ("drawer-only", 3)]; ``"none"`` -> []."""
+    from worlds.tabletop import TASKS, VARIANTS
+
+    if text.strip() == "none":
+        return []
+    scenes = []
+    for item in (part.strip() for part in text.split(",") if part.strip()):
+        task, _, variant = item.partition(":")
+        if task not in TASKS:
+            raise ValueError(f"{item!r}: unknown task {task!r} (known: {', '.join(TASKS)})")
+        if not variant.isdigit() or not 0 <= int(variant) < VARIANTS:
+            raise ValueError(f"{item!r}: the variant must be a number 0..{VARIANTS - 1}")
+        scenes.append((task, int(variant)))
+    return scenes
 
 
 def _bench_step(args: argparse.Namespace) -> int:

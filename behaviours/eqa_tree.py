@@ -5,7 +5,10 @@
     EQA episode (selector: until answered)
     ├─ Confident (sequence)         CheckConfidence → Answer
     ├─ Out of budget (sequence)     BudgetSpent → AnswerFallback
-    └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → UpdatePredictionSet → Next move
+    └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → UpdatePredictionSet → Act → Next move
+                                    Act (selector):       Confident enough (CheckConfidence)
+                                                          or Look inside: LookInside → QueryVLM → UpdatePredictionSet
+                                                          or Nothing to open
                                     Next move (selector): StopHere (CheckConfidence)
                                                           or Go on: [QueryDirections] → Explore
                                     Explore (sequence):   SelectFrontier → Move or finish
@@ -14,7 +17,8 @@
 
 The stopping rule (conformal prediction by default) decides in UpdatePredictionSet; a confident
 robot skips its next move and answers on the following tick. QueryDirections (the VLM's semantic
-values of directions) is there for the semantic methods only.
+values of directions) is there for the semantic methods only. LookInside opens the storage a
+question asks what is in, when it is in view, so that the VLM sees inside (`behaviours.look_inside`).
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from behaviours.answer import Answer, AnswerFallback, ShouldStop
 from behaviours.confidence import CheckConfidence, UpdatePredictionSet
 from behaviours.explore import MarkExplorationComplete, SelectFrontier
 from behaviours.integrate_map import IntegrateMap
+from behaviours.look_inside import LookInside, LookInsideConfig
 from behaviours.navigate import Navigate
 from behaviours.observe import Observe
 from behaviours.query_directions import QueryDirections
@@ -59,6 +64,7 @@ class EqaTreeParts:
     seed: int = 0  # seeds prompt-point sampling and frontier sampling
     images_dir: Path | None = None  # where the annotated images of visual prompts are saved
     stopping: StoppingRule = field(default_factory=BudgetRule)
+    act: LookInsideConfig | None = field(default_factory=LookInsideConfig)  # None: never open anything
 
 
 def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
@@ -83,8 +89,17 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     next_move = py_trees.composites.Selector(
         "Next move", memory=False, children=[CheckConfidence("StopHere"), explore]
     )
+    act: list[py_trees.behaviour.Behaviour] = []
+    if parts.act is not None:
+        look_inside = py_trees.composites.Sequence("Look inside", memory=True, children=[
+            LookInside(parts.link, parts.act), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer, "QueryVLM inside"),
+            UpdatePredictionSet(parts.stopping, "UpdatePredictionSet inside"),
+        ])
+        act = [py_trees.composites.Selector("Act", memory=False, children=[
+            CheckConfidence("Confident enough"), look_inside, py_trees.behaviours.Success("Nothing to open"),
+        ])]
     step = py_trees.composites.Sequence("Step", memory=True, children=[
         Observe(parts.link, timer), IntegrateMap(timer), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer),
-        UpdatePredictionSet(parts.stopping), next_move,
+        UpdatePredictionSet(parts.stopping), *act, next_move,
     ])
     return py_trees.composites.Selector("EQA episode", memory=False, children=[confident, out_of_budget, step])

@@ -768,11 +768,12 @@ def _closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence
 
 
 def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
-               door_share: float = 0.35) -> tuple[float, float, float]:
+               door_share: float = 0.35, distance_m: float | None = None) -> tuple[float, float, float]:
     """Where the base should stand to open or close a part, from where it stands now.
 
-    It stays as far from the part's front as it is (slid along the front, never towards it) and
-    turns to face the front square on, with its axis opposite the handle of a drawer, or
+    It stays as far from the part's front as it is (slid along the front, never towards it), or
+    ``distance_m`` from the handle along the front's normal when given, and turns to face the front
+    square on, with its axis opposite the handle of a drawer, or
     ``door_share`` of the way from a door's hinge to its handle: there the door, swinging open,
     passes beside the arm instead of through it, and the handle stays within reach.
     """
@@ -788,6 +789,8 @@ def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
         aim = geometry.handle_point[:2]
     here = np.array([x, y])
     there = here + along * float((aim - here) @ along)
+    if distance_m is not None:
+        there = aim + normal * float(distance_m)
     return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])
 
 

@@ -7,8 +7,8 @@ object standing in that box is found to block it. All of it is read from the rem
 
 - a handle belongs to its door or drawer, and a door or drawer to its storage piece (the memory
   attaches parts by adjacency);
-- any other thing lies *inside* the smallest box that contains its centre: a storage piece's (its
-  carcass and parts together), an open drawer's, a box put over it, or the box a thing moved away
+- any other thing lies *inside* the smallest box that contains its centre: a storage piece's, an
+  open drawer's, a box put over it, or the box a thing moved away
   filled before it was moved (``vacated``: a cup found where a box was lifted from lay inside the
   box); else it stands *on* the highest thing whose top is just below its bottom and under its
   centre (a piece's top counting its parts: a chest whose front is all drawers);
@@ -81,9 +81,9 @@ def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], 
         return (inst.parent, "belongs") if inst.parent in by_id else (None, None)
     centre = inst.centroid
     lo, _ = boxes[inst.id]
-    own = _volume(boxes[inst.id])
+    own = _volume(inst.bounds)
     containers = [(box, other_id) for other_id, box in vacated.items() if other_id != inst.id]
-    containers += [(boxes[other.id], other.id) for other in live
+    containers += [(other.bounds, other.id) for other in live  # own boxes: an open door's swing contains nothing
                    if other.id != inst.id and other.label not in ("door", HANDLE)]
     inside = [(_volume(box), other_id) for box, other_id in containers if _contains(box, centre) and _volume(box) > own]
     if inside:

@@ -20,12 +20,13 @@ What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled 
 a cup put down elsewhere keep their identity, so the graph gains what was revealed and nothing
 else. The box a thing filled before it was picked away is kept while it is away: what is found
 there lay inside it (the Matryoshka's smaller doll). Everything a skill reports is kept in
-`skill_log` for timing.
+`skill_log`, and their timings in `skill_times`.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -40,7 +41,7 @@ from agent.perception.geometry import (
     GeometryError,
     PartGeometry,
     handle_geometry,
-    opening_of,
+    fit_opening,
     part_motion,
     top_grasp_point,
 )
@@ -53,8 +54,9 @@ from skills.primitives import PRIMITIVES
 from skills.stow import Stow
 
 SURFACE_LABELS = ("table", "counter")
-#: A handle seen this close to where a skill says it left it is that handle.
-SEEN_HANDLE_M = 0.08
+#: The part seen nearest to where a skill says it left it, within this, is that part: a part held
+#: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
+SEEN_PART_M = 0.25
 
 
 @dataclass(frozen=True)
@@ -63,10 +65,12 @@ class RobotConfig:
     open; the head camera sees into the rest from the start pose. A drawer's tray is best seen from
     just above it; the way to a view behind an open door passes the door itself, which the arm
     would push shut again. ``idle_toward_robot_m``: how far from the object, towards the robot,
-    the idle spot is sought first."""
+    the idle spot is sought first. ``stand_off_m``: how far from a part's front the base stands to
+    open it; None keeps the distance it has (at a table, where it already stands within reach)."""
 
     skill_timeout_s: float = 120.0
     look_inside: tuple[str, ...] = ("drawer",)
+    stand_off_m: float | None = None
     idle_toward_robot_m: float = 0.2
 
 
@@ -100,7 +104,9 @@ class Robot:
         self.away: dict[int, _Away] = {}
         self.vacated: dict[int, Box] = {}
         self.skill_log: list[skill_base.SkillResult] = []
+        self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
         self.notes: list[str] = []
+        self.views: list[Observation] = []  # frames taken inside the last part opened
         self._eye = np.zeros(3)
 
     # ---- Perception ---------------------------------------------------------------------------
@@ -108,7 +114,7 @@ class Robot:
         """Back to the start pose, one head frame into the memory; the memory's detections."""
         if self.home is not None:
             try:
-                self._drive(self.home)
+                self.return_home()
             except SkillPlanError as error:  # look from where it stands rather than not at all
                 self.notes.append(f"observe: {error}")
         self._look("head")
@@ -117,8 +123,8 @@ class Robot:
     # ---- SkillExecutor ------------------------------------------------------------------------
     def execute(self, call: SkillCall) -> SkillResult:
         """Run one exploration primitive on the remembered instance ``call.instance``."""
-        handlers = {"open_door": self._open, "open_drawer": self._open, "close_door": self._close,
-                    "close_drawer": self._close, "pick_away": self._pick_away, "pick_back": self._pick_back}
+        handlers = {"open_door": self._open_call, "open_drawer": self._open_call, "close_door": self._close_call,
+                    "close_drawer": self._close_call, "pick_away": self._pick_away, "pick_back": self._pick_back}
         handler = handlers.get(call.primitive)
         if handler is None:
             return SkillResult(False, f"{call.primitive}: not an exploration primitive ({', '.join(handlers)})")
@@ -132,21 +138,31 @@ class Robot:
             return SkillResult(False, f"{call.primitive} {instance.label} {instance.id}: {error}")
 
     # ---- doors and drawers --------------------------------------------------------------------
-    def _open(self, call: SkillCall, part: Instance) -> SkillResult:
+    def _open_call(self, call: SkillCall, part: Instance) -> SkillResult:
+        return self.open_part(part, self._handle(call, part))
+
+    def _close_call(self, call: SkillCall, part: Instance) -> SkillResult:
+        return self.close_part(part)
+
+    def open_part(self, part: Instance, handle: int | None = None) -> SkillResult:
+        """Stand before the door or drawer ``part``, open it by ``handle`` (its first seen handle by
+        default), look inside; the frames taken while it stood open are in `views`."""
         if self.home is None:
             raise SkillPlanError("the robot has not looked yet")
-        handle = self._handle(call, part)
+        if handle is None:
+            handle = self._handle(None, part)
+        self.views = []
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
-        stand = stand_pose(geometry, self.home)
+        stand = stand_pose(geometry, self.home, distance_m=self.config.stand_off_m)
         self._drive(stand)
         self._look("head")
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
         closed_centre = part.centroid
-        result = self._skill(call.primitive, skill_base.SkillTarget(
+        result = self._skill(f"open_{geometry.kind}", skill_base.SkillTarget(
             geometry=geometry, surface_z=self._surface_z(), label=f"{part.label} {part.id}"))
         if result.achieved is None:
             return SkillResult(False, result.reason)
-        amount = self._seen_opening(geometry, part, result.achieved)
+        amount = self._seen_opening(geometry, part, handle, result.achieved)
         if not result.ok:
             self.opened[part.id] = _Opened(geometry, amount, stand, closed_centre)
             return SkillResult(False, result.reason)
@@ -156,32 +172,43 @@ class Robot:
             self._look_into(look)
         return SkillResult(True)
 
-    def _seen_opening(self, geometry: PartGeometry, part: Instance, reported: float) -> float:
-        """How far the part stands open by a head-camera look (`opening_of` the handle seen nearest
-        to where the skill says it left it), the skill's figure when no handle is seen there; the
-        memory is told the part moved that far, then given the frame."""
+    def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float) -> float:
+        """How far the part stands open by a head-camera look: `fit_opening` of the handle's remembered
+        points onto the handle seen nearest to where the skill says it left it (else of the part's
+        own points onto the part seen there), searching up to a quarter beyond the skill's figure;
+        that figure when neither is seen. The memory is told the part moved that far, then given
+        the frame."""
         observation = self._frame("head")
-        expected = (part_motion(geometry, reported) @ np.append(geometry.handle_point, 1.0))[:3]
         cfg = self.memory.config
-        handles = [centres(d.keys, cfg.voxel_m).mean(axis=0)
-                   for d in detect(observation.depth, observation.segmentation, frame_labels(observation.labels),
-                                   observation.intrinsics, observation.camera_to_world, cfg.voxel_m, cfg.min_pixels,
-                                   cfg.max_depth_m) if d.label == "handle"]
-        near = [h for h in handles if np.linalg.norm(h - expected) <= SEEN_HANDLE_M]
+        detections = detect(observation.depth, observation.segmentation, frame_labels(observation.labels),
+                            observation.intrinsics, observation.camera_to_world, cfg.voxel_m, cfg.min_pixels,
+                            cfg.max_depth_m)
+        motion = part_motion(geometry, reported)
         amount = reported
-        if near:
-            amount = opening_of(geometry, min(near, key=lambda h: float(np.linalg.norm(h - expected))))
+        for inst in (self.memory.get(handle), part):
+            closed = inst.points()
+            if len(closed) < 3:
+                continue
+            expected = motion[:3, :3] @ closed.mean(axis=0) + motion[:3, 3]
+            seen = [pts for pts in (centres(d.keys, cfg.voxel_m) for d in detections if d.label == inst.label)
+                    if len(pts) >= 3 and np.linalg.norm(pts.mean(axis=0) - expected) <= SEEN_PART_M]
+            if seen:
+                nearest = min(seen, key=lambda pts: float(np.linalg.norm(pts.mean(axis=0) - expected)))
+                amount, _ = fit_opening(geometry, closed, nearest, 1.25 * reported)
+                break
         if abs(amount) > 0:
             self.memory.move(part.id, part_motion(geometry, amount))
         self.memory.integrate(observation)
+        self.views.append(observation)
         return amount
 
-    def _close(self, call: SkillCall, part: Instance) -> SkillResult:
-        opened = self.opened.get(part.id)
+    def close_part(self, part: Instance) -> SkillResult:
+        """Close a door or drawer this robot opened, from where it stood to open it."""
+        opened = self._remembered(self.opened, part)
         if opened is None:
             return SkillResult(False, f"{part.label} {part.id} was not opened by this robot")
         self._drive(opened.stand)
-        result = self._skill(call.primitive, skill_base.SkillTarget(
+        result = self._skill(f"close_{opened.geometry.kind}", skill_base.SkillTarget(
             geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(),
             label=f"{part.label} {part.id}"))
         left = opened.amount if result.achieved is None else result.achieved
@@ -193,8 +220,8 @@ class Robot:
         del self.opened[part.id]
         return SkillResult(True)
 
-    def _handle(self, call: SkillCall, part: Instance) -> int:
-        named = call.params.get("handle")
+    def _handle(self, call: SkillCall | None, part: Instance) -> int:
+        named = None if call is None else call.params.get("handle")
         if isinstance(named, str) and named.startswith("o") and named[1:].isdigit():
             return self.memory.get(int(named[1:])).id
         handles = [c for c in part.children if self.memory.get(c).label == "handle"]
@@ -218,7 +245,7 @@ class Robot:
         view that cannot be reached is skipped: the head camera saw what it could."""
         looked = self._skill("move_camera", skill_base.SkillTarget(look_point=point, surface_z=self._surface_z()))
         if looked.ok:
-            self._look("wrist")
+            self.views.append(self._look("wrist"))
         self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=self._surface_z()))
 
     # ---- picks ----------------------------------------------------------------------------------
@@ -248,7 +275,7 @@ class Robot:
         return SkillResult(True)
 
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
-        away = self.away.get(obj.id)
+        away = self._remembered(self.away, obj)
         if away is None:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert self.home is not None  # set by the look before the pick away
@@ -262,16 +289,34 @@ class Robot:
             return SkillResult(False, result.reason)
         self.memory.move(obj.id, _translation(away.grasp_point - now))
         del self.away[obj.id]
+        self._remembered(self.vacated, obj)
         self.vacated.pop(obj.id, None)
         return SkillResult(True)
+
+    def _remembered(self, records: dict[int, Any], inst: Instance) -> Any:
+        """What ``records`` holds for ``inst``, under its id or an id the memory has since merged into
+        it (the drawer seen open is the drawer that was closed); re-keyed to its id."""
+        for key in list(records):
+            if key != inst.id and self.memory.get(key).id == inst.id:
+                records[inst.id] = records.pop(key)
+        return records.get(inst.id)
+
+    def return_home(self) -> None:
+        """Drive back to where the robot first looked."""
+        if self.home is not None:
+            self._drive(self.home)
 
     # ---- the body -------------------------------------------------------------------------------
     def _skill(self, name: str, target: skill_base.SkillTarget) -> skill_base.SkillResult:
         skill = PRIMITIVES.get(name) or (Stow if name == Stow.skill_name else None)
         if skill is None:
             raise SkillPlanError(f"no skill named {name!r}")
+        began = time.perf_counter()
         result = skill_base.run_skill(skill, self.link, target, timeout_s=self.config.skill_timeout_s)
         self.skill_log.append(result)
+        self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
+                                 "execution_s": round(result.execution_s, 3),
+                                 "wall_s": round(time.perf_counter() - began, 3)})
         if not result.ok and skill is not Stow and (result.steps_done or result.execution_s > 0):
             self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=target.surface_z))  # out of the way
         return result

@@ -59,7 +59,7 @@ def run_robot(task: str, seed: int) -> dict[str, Any]:
         "failed_actions": [e.describe() for e in result.log if not e.ok],
         "skills": len(skills), "skills_ok": sum(r.ok for r in skills),
         "skill_seconds": round(sum(r.execution_s for r in skills), 2),
-        "planning_ms": round(sum(r.planning_ms for r in skills), 1),
+        "planning_ms": round(sum(r.planning_ms for r in skills), 1), "skill_times": robot.skill_times,
         "seconds": round(time.monotonic() - started, 3),
     }
 

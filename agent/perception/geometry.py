@@ -296,20 +296,28 @@ def moved_geometry(geometry: PartGeometry, amount: float) -> PartGeometry:
                         geometry.hinge_point, geometry.hinge_axis)
 
 
-def opening_of(geometry: PartGeometry, handle_point: np.ndarray) -> float:
-    """How far the part stands open when its handle is seen at ``handle_point``: metres along the
-    normal for a drawer, radians about the hinge axis for a door (the inverse of `part_motion` for
-    the handle). What a skill's own account of the motion cannot tell: a drawer pulled past the end
-    of its travel stops there while the hand pulls on, and only a look says where it stopped."""
-    seen = np.asarray(handle_point, dtype=float) - geometry.handle_point
-    if geometry.kind == "drawer":
-        return float(seen @ geometry.normal)
-    assert geometry.hinge_point is not None and geometry.hinge_axis is not None
-    axis = _unit(geometry.hinge_axis, "hinge_axis")
-    before = geometry.handle_point - geometry.hinge_point
-    after = np.asarray(handle_point, dtype=float) - geometry.hinge_point
-    before, after = before - (before @ axis) * axis, after - (after @ axis) * axis
-    return float(math.atan2(np.cross(before, after) @ axis, before @ after))
+def fit_opening(geometry: PartGeometry, closed_points: np.ndarray, seen_points: np.ndarray, most: float,
+                steps: int = 80) -> tuple[float, float]:
+    """How far the part stands open, from a view of it: the opening in [0, ``most``] that carries the
+    part's points as seen closed (``closed_points``) best onto the points seen now (``seen_points``,
+    often only part of it), scored by the median distance from each seen point to the carried
+    ones. Returns (opening, that median distance in m).
+
+    What a skill's own account of the motion cannot tell: a part held back (by the end of its
+    travel, by the robot's own body in a door's swing) stops there while the hand pulls on.
+    """
+    from scipy.spatial import cKDTree
+
+    closed = _points(closed_points, "closed_points", 3)
+    seen = _points(seen_points, "seen_points", 3)
+    best = (0.0, math.inf)
+    for amount in np.linspace(0.0, float(most), steps + 1):
+        motion = part_motion(geometry, float(amount))
+        distance, _ = cKDTree(closed @ motion[:3, :3].T + motion[:3, 3]).query(seen)
+        score = float(np.median(distance))
+        if score < best[1]:
+            best = (float(amount), score)
+    return best
 
 
 def part_motion(geometry: PartGeometry, amount: float) -> np.ndarray:

@@ -446,7 +446,7 @@ class InstanceMemory:
                 count = int(np.isfinite(distance).sum())
                 if count > best_count:
                     best, best_count = candidate.id, count
-            if best is None and not has_parent:
+            if best is None and not has_parent and inst.label != "handle":
                 best = self._beneath_footprint(inst, [c for c in live.values() if c.label in allowed])
             if best is not None and best != inst.parent:
                 self._set_parent(inst, best)

@@ -156,6 +156,8 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     outcome.extra["step_scores"] = [s.to_record() for s in log_of_steps.steps]
     writer.register_key(bb.PREDICTION_SET, access=py_trees.common.Access.READ)
     outcome.extra["prediction_set"] = writer.get(bb.PREDICTION_SET)
+    writer.register_key(bb.ACTS, access=py_trees.common.Access.READ)
+    outcome.extra["acts"] = writer.get(bb.ACTS) if writer.exists(bb.ACTS) else []
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
     publisher.undeclare()
     events.undeclare()
