@@ -94,6 +94,7 @@ def test_the_tree_stops_where_a_replay_of_the_full_episode_says(tmp_path: Path) 
     assert early["step_scores"] == full["step_scores"][: expected.step]  # same episode up to the stop
     assert early["stop"]["rule"] == "cp" and early["stop"]["q_hat"] == pytest.approx(q_hat)
     assert early["answer_detail"]["rule"].startswith("conformal set is")
+    assert early["acts"] == []  # a question about no storage: nothing opened
     snapshots = [json.loads(line) for line in (Path(early["folder"]) / "snapshots.jsonl").read_text().splitlines()]
     shown = {key.lstrip("/") for snapshot in snapshots for key in snapshot["blackboard"]}
     assert {"prediction_set", "q_hat", "epsilon"} <= shown

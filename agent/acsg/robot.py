@@ -159,7 +159,7 @@ class Robot:
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
         closed_centre = part.centroid
         result = self._skill(f"open_{geometry.kind}", skill_base.SkillTarget(
-            geometry=geometry, surface_z=self._surface_z(), label=f"{part.label} {part.id}"))
+            geometry=geometry, surface_z=self._surface_z(geometry.handle_point), label=f"{part.label} {part.id}"))
         if result.achieved is None:
             return SkillResult(False, result.reason)
         amount = self._seen_opening(geometry, part, handle, result.achieved)
@@ -209,7 +209,7 @@ class Robot:
             return SkillResult(False, f"{part.label} {part.id} was not opened by this robot")
         self._drive(opened.stand)
         result = self._skill(f"close_{opened.geometry.kind}", skill_base.SkillTarget(
-            geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(),
+            geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(opened.geometry.handle_point),
             label=f"{part.label} {part.id}"))
         left = opened.amount if result.achieved is None else result.achieved
         motion = part_motion(opened.geometry, left) @ np.linalg.inv(part_motion(opened.geometry, opened.amount))
@@ -243,10 +243,11 @@ class Robot:
     def _look_into(self, point: np.ndarray) -> None:
         """The wrist camera at ``point``, its frame into the memory, the arm folded away again. A
         view that cannot be reached is skipped: the head camera saw what it could."""
-        looked = self._skill("move_camera", skill_base.SkillTarget(look_point=point, surface_z=self._surface_z()))
+        surface_z = self._surface_z(point)
+        looked = self._skill("move_camera", skill_base.SkillTarget(look_point=point, surface_z=surface_z))
         if looked.ok:
             self.views.append(self._look("wrist"))
-        self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=self._surface_z()))
+        self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=surface_z))
 
     # ---- picks ----------------------------------------------------------------------------------
     def _pick_away(self, call: SkillCall, obj: Instance) -> SkillResult:
@@ -256,7 +257,7 @@ class Robot:
         top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
         stand_x = float(top[0])
         self._drive((stand_x, self.home[1], self.home[2]))
-        surface = self._surface()
+        surface = self._surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
         others = [inst.points() for inst in self.memory.live() if inst.id != surface.id]
@@ -284,7 +285,8 @@ class Robot:
         now = top_grasp_point(points) if len(points) else away.placed_point
         result = self._skill(call.primitive, skill_base.SkillTarget(
             object_point=now, object_extent=away.extent, place_point=away.grasp_point,
-            surface_z=self._surface_z(), label=f"{obj.label} {obj.id}"))
+            surface_z=self._surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
+            label=f"{obj.label} {obj.id}"))
         if not result.ok:
             return SkillResult(False, result.reason)
         self.memory.move(obj.id, _translation(away.grasp_point - now))
@@ -340,13 +342,23 @@ class Robot:
             raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
                                  f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")
 
-    def _surface(self) -> Instance | None:
-        surfaces = [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
-        return max(surfaces, key=lambda inst: inst.voxel_count, default=None)
+    def _surface(self, under: np.ndarray) -> Instance | None:
+        """The table or counter below the point ``under`` (its top lower, its footprint around it):
+        what the hand must keep above there. None on the floor (a cabinet standing in a room)."""
+        found = []
+        for inst in (inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)):
+            lo, hi = inst.bounds
+            if np.all(lo[:2] <= under[:2]) and np.all(under[:2] <= hi[:2]) and _top(inst) < under[2]:
+                found.append(inst)
+        return max(found, key=_top, default=None)
 
-    def _surface_z(self) -> float | None:
-        surface = self._surface()
-        return None if surface is None else float(np.percentile(surface.points()[:, 2], 99))
+    def _surface_z(self, under: np.ndarray) -> float | None:
+        surface = self._surface(under)
+        return None if surface is None else _top(surface)
+
+
+def _top(surface: Instance) -> float:
+    return float(np.percentile(surface.points()[:, 2], 99))
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

@@ -212,6 +212,7 @@ def _outcome_fields(outcome: EpisodeOutcome, result: dict[str, Any]) -> dict[str
         "steps": outcome.extra.get("steps", 0),
         "step_scores": outcome.extra.get("step_scores", []),
         "prediction_set": outcome.extra.get("prediction_set"),
+        "acts": outcome.extra.get("acts", []),
         "ticks": outcome.ticks,
         "seconds": round(outcome.seconds, 3),
     }
