@@ -19,8 +19,8 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
 What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled out, a door swung,
 a cup put down elsewhere keep their identity, so the graph gains what was revealed and nothing
 else. The box a thing filled before it was picked away is kept while it is away: what is found
-there lay inside it (the Matryoshka's smaller doll). Everything a skill reports is kept in
-`skill_log`, and their timings in `skill_times`.
+there lay inside it (the Matryoshka's smaller doll). Every skill run is kept in
+`skill_times`: its name, outcome and timings.
 """
 
 from __future__ import annotations
@@ -103,7 +103,6 @@ class Robot:
         self.opened: dict[int, _Opened] = {}
         self.away: dict[int, _Away] = {}
         self.vacated: dict[int, Box] = {}
-        self.skill_log: list[skill_base.SkillResult] = []
         self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
         self.notes: list[str] = []
         self.views: list[Observation] = []  # frames taken inside the last part opened
@@ -315,7 +314,6 @@ class Robot:
             raise SkillPlanError(f"no skill named {name!r}")
         began = time.perf_counter()
         result = skill_base.run_skill(skill, self.link, target, timeout_s=self.config.skill_timeout_s)
-        self.skill_log.append(result)
         self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
                                  "execution_s": round(result.execution_s, 3),
                                  "wall_s": round(time.perf_counter() - began, 3)})

@@ -53,13 +53,13 @@ def run_robot(task: str, seed: int) -> dict[str, Any]:
     explored = in_world_ids(result.graph, robot.memory)
     metrics = episode_metrics(explored, from_ground_truth(scene.ground_truth_acsg()), start_positions,
                               final_positions, start_states, final_states, tolerance_m=PUT_BACK_M)
-    skills = robot.skill_log
+    skills = robot.skill_times
     return {
         **asdict(metrics), "actions": len(result.steps()), "returned_to_start": result.returned_to_start,
         "failed_actions": [e.describe() for e in result.log if not e.ok],
-        "skills": len(skills), "skills_ok": sum(r.ok for r in skills),
-        "skill_seconds": round(sum(r.execution_s for r in skills), 2),
-        "planning_ms": round(sum(r.planning_ms for r in skills), 1), "skill_times": robot.skill_times,
+        "skills": len(skills), "skills_ok": sum(r["ok"] for r in skills),
+        "skill_seconds": round(sum(r["execution_s"] for r in skills), 2),
+        "planning_ms": round(sum(r["planning_ms"] for r in skills), 1), "skill_times": skills,
         "seconds": round(time.monotonic() - started, 3),
     }
 
@@ -88,32 +88,28 @@ def in_world_ids(graph: ACSG, memory: InstanceMemory) -> ACSG:
     one thing in two), keep their memory id prefixed with ``m``: they cannot match the ground
     truth and count against the exploration, as they should.
     """
-    taken: dict[str, str] = {}
-    rename: dict[str, str] = {}
+    taken: set[str] = set()
+    names: dict[str, str] = {}  # old node id -> new, objects first (actions are named after them)
     for node in graph.objects():
         try:
             hint = memory.get(int(node.instance)).hint if node.instance is not None else None
         except (KeyError, ValueError):
             hint = None
-        world_id = None if hint is None else str(hint)
-        if world_id is None or world_id in taken:
-            world_id = f"m{node.instance}"
-        taken[world_id] = node.id
-        rename[node.id] = f"o{world_id}"
+        world_id = f"m{node.instance}" if hint is None or str(hint) in taken else str(hint)
+        taken.add(world_id)
+        names[node.id] = f"o{world_id}"
     data = graph.to_dict()
     for node in data["nodes"]:
+        old = node["id"]
         if node["kind"] == "object":
-            node["instance"] = rename[node["id"]][1:]
-            node["id"] = rename[node["id"]]
+            node["id"] = names[old]
+            node["instance"] = node["id"][1:]
         else:
-            node["target"] = rename[node["target"]]
-            kind, _, _ = node["id"].partition(":")
-            node["id"] = f"{kind}:{node['target'][1:]}"
+            node["target"] = names[node["target"]]
+            node["id"] = names[old] = f"{old.partition(':')[0]}:{node['target'][1:]}"
             handle = node.get("params", {}).get("handle")
-            if handle in rename:
-                node["params"]["handle"] = rename[handle]
-    actions = {old["id"]: new["id"] for old, new in zip(graph.to_dict()["nodes"], data["nodes"])}
-    names = {**rename, **actions}
+            if handle in names:
+                node["params"]["handle"] = names[handle]
     for edge in data["edges"]:
         edge["source"], edge["target"] = names[edge["source"]], names[edge["target"]]
     return ACSG.from_dict(data)
