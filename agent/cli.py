@@ -28,6 +28,10 @@ def main(argv: list[str] | None = None) -> int:
         from agent.acsg.cli import main as acsg_main
 
         return acsg_main(argv[1:])
+    if argv[:1] == ["lfe"]:
+        from agent.lfe.cli import main as lfe_main
+
+        return lfe_main(argv[1:])
     parser = _parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
@@ -46,6 +50,8 @@ def _parser() -> argparse.ArgumentParser:
     commands.add_parser("world", help="serve a simulated home over Zenoh (see `homebot world --help`)")
     commands.add_parser("scene", help="make, draw and check scene specs (see `homebot scene --help`)")
     commands.add_parser("acsg", help="retrieval plans and pictures of scene graphs (see `homebot acsg --help`)")
+    commands.add_parser("lfe", help="training data and training of the frontier-property network "
+                                    "(see `homebot lfe --help`)")
 
     run = commands.add_parser("run", help="run one EQA episode against a simulated home")
     _config_options(run)
@@ -53,7 +59,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
     run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
     run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
-    run.add_argument("--method", choices=("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv"),
+    run.add_argument("--method", choices=("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv", "lfe"),
                      help="exploration method (default semantic; same as --set explore.method=…)")
     run.add_argument("--stop", choices=("cp", "entropy", "relevance", "budget"),
                      help="stopping rule (default cp: conformal prediction; same as --set stop.rule=…)")
@@ -117,6 +123,19 @@ def _parser() -> argparse.ArgumentParser:
                              help="results go here; reruns resume")
     interactive.set_defaults(handler=_eval_interactive)
 
+    coverage = evaluations.add_parser("coverage", help="learning-augmented exploration: coverage in 500 steps "
+                                                       "(the paper's Table I)")
+    coverage.add_argument("--homes", type=int, default=8, help="homes per size: small, medium, large (default 8)")
+    coverage.add_argument("--methods", default="fbe-near,greedy,lfe,lfe-oracle",
+                          help="comma separated (default: all four)")
+    coverage.add_argument("--model", type=Path, default=None,
+                          help="a trained model (homebot lfe train; default: the one shipped with homebot)")
+    coverage.add_argument("--steps", type=int, default=500, help="step budget of an episode (default 500, the paper's)")
+    coverage.add_argument("--workers", type=int, default=1, help="episodes at once, one process each (default 1)")
+    coverage.add_argument("--out", type=Path, default=Path("runs/eval-coverage"),
+                          help="results, table.md and coverage.png go here; reruns resume")
+    coverage.set_defaults(handler=_eval_coverage)
+
     calibrate = commands.add_parser("calibrate", help="calibrate conformal prediction on a suite")
     _suite_run_options(calibrate, "runs/calibration.json",
                        "the calibration file; episodes go beside it as .episodes.jsonl; reruns resume")
@@ -138,6 +157,11 @@ def _parser() -> argparse.ArgumentParser:
                           "(default door-only:0,drawer-only:0; 'none' for kinematics only)")
     arm.add_argument("--json", action="store_true", help="print the figures as JSON")
     arm.set_defaults(handler=_bench_skills)
+    plan = benches.add_parser("plan", help="LFE planning time per step against the number of frontiers")
+    plan.add_argument("--steps", type=int, default=200, help="steps explored in each home (default 200)")
+    plan.add_argument("--model", type=Path, default=None, help="a trained model (default: the shipped one)")
+    plan.add_argument("--json", action="store_true", help="print the figures as JSON")
+    plan.set_defaults(handler=_bench_plan)
     world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
     world.add_argument("--areas", default="60,150,300", help="floor areas in m², comma separated")
     world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
@@ -375,6 +399,25 @@ def _eval_interactive(args: argparse.Namespace) -> int:
     return 0
 
 
+def _eval_coverage(args: argparse.Namespace) -> int:
+    from agent.eval.coverage import evaluate_coverage, format_table, plot_curves, print_progress
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    try:
+        report = evaluate_coverage(args.out, args.homes, methods, args.workers, args.model, args.steps,
+                                   print_progress)
+    except ValueError as error:
+        print(f"homebot eval coverage: {error}", file=sys.stderr)
+        return 2
+    text = format_table(report["table"])
+    (args.out / "table.md").write_text(text + "\n", encoding="utf-8")
+    figure = plot_curves(report["rows"], methods, args.out / "coverage.png")
+    print(f"{report['n']} episodes; coverage % in {args.steps} steps, mean ± s.e. over the homes")
+    print(text)
+    print(f"results {report['results']}, curves {figure}")
+    return 0
+
+
 def _suite_tabletop(args: argparse.Namespace) -> int:
     from worlds.tabletop import write_tabletop_suites
 
@@ -410,6 +453,24 @@ def _bench_skills(args: argparse.Namespace) -> int:
         return 2
     report = bench_skills(args.n, args.seed, scenes)
     print(dump(report) if args.json else format_skills_table(report))
+    return 0
+
+
+def _bench_plan(args: argparse.Namespace) -> int:
+    from agent.bench import dump
+    from agent.eval.coverage import SEED_BASE, SIZES, home_area
+    from agent.lfe.bench import bench_plan, format_plan_table
+
+    if args.steps < 1:
+        print(f"homebot bench plan: --steps must be at least 1, got {args.steps}", file=sys.stderr)
+        return 2
+    homes = [(SEED_BASE + 1000 * band, home_area(size, SEED_BASE + 1000 * band)) for band, size in enumerate(SIZES)]
+
+    def progress(done: int, total: int, plans: int) -> None:
+        print(f"  home {done}/{total}: {plans} planning steps timed", file=sys.stderr, flush=True)
+
+    report = bench_plan(homes, args.model, args.steps, progress)
+    print(dump(report) if args.json else format_plan_table(report))
     return 0
 
 

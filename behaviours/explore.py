@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import contextlib
+from typing import TYPE_CHECKING
 
 import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
-from agent.planning.explore import ExploreConfig, nearest_frontier, plan_move, reachable_frontiers
-from agent.planning.semantic import FrontierWeightConfig, method_flags, semantic_choice
+from agent.mapping.occupancy import ExplorationMap
+from agent.planning.explore import Candidates, ExploreConfig, nearest_frontier, plan_move, reachable_frontiers
+from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, method_flags, semantic_choice
 from agent.runtime.timing import StageTimer
+
+if TYPE_CHECKING:
+    from agent.lfe.estimator import LearnedEstimator
 
 
 class SelectFrontier(py_trees.behaviour.Behaviour):
@@ -21,7 +26,9 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
     acts on it. Keeping the two apart means a move that fails later is reported as that failure.
 
     FBE takes the nearest frontier; the semantic methods sample one in proportion to its weight
-    from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator.
+    from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator;
+    LFE plans over the shipped network's estimates with the steps left (`agent.lfe.explore`),
+    loading the network on the first choice so that other methods never import torch.
     """
 
     def __init__(self, config: ExploreConfig = ExploreConfig(), weights: FrontierWeightConfig = FrontierWeightConfig(),
@@ -31,12 +38,17 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.config = config
         self.weights = weights
         self.semantic = method_flags(config.method).use_semantic
+        self.learned = config.method == ExploreMethod.LFE
+        self.estimator: LearnedEstimator | None = None
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.timer = timer
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.MAP, access=Access.READ)
         if self.semantic:
             self.blackboard.register_key(bb.SEMANTIC_MAP, access=Access.READ)
+        if self.learned:
+            self.blackboard.register_key(bb.BUDGET, access=Access.READ)
+            self.blackboard.register_key(bb.ANSWER_LOG, access=Access.READ)
         self.blackboard.register_key(bb.OBSERVATION, access=Access.READ)
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
 
@@ -47,6 +59,8 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             candidates = reachable_frontiers(world_map, robot_xy, self.config)
             if self.semantic:
                 index, _ = semantic_choice(candidates, self.blackboard.get(bb.SEMANTIC_MAP), self.weights, self.rng)
+            elif self.learned:
+                index = self._learned_choice(world_map, robot_xy, candidates) if candidates.frontiers else None
             else:
                 index = nearest_frontier(candidates)
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
@@ -54,9 +68,19 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.SUCCESS
-        rule = "sampled by semantic weight" if self.semantic else "nearest"
+        rule = "sampled by semantic weight" if self.semantic else "Bellman over learned R_A, D" if self.learned else "nearest"
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
+
+
+    def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
+        from agent.lfe.estimator import LearnedEstimator
+        from agent.lfe.explore import lfe_frontier
+
+        if self.estimator is None:
+            self.estimator = LearnedEstimator.load()
+        steps_left = self.blackboard.get(bb.BUDGET) - len(self.blackboard.get(bb.ANSWER_LOG))
+        return lfe_frontier(world_map, robot_xy, candidates, self.estimator, steps_left, self.config.max_step_m).choice
 
 
 class MarkExplorationComplete(py_trees.behaviour.Behaviour):

@@ -1,4 +1,4 @@
-"""Shared fixtures: a PyBullet client, and a world served over real Zenoh on loopback."""
+"""Shared fixtures: a PyBullet client, a world served over real Zenoh on loopback, one torch thread."""
 
 from __future__ import annotations
 
@@ -27,3 +27,15 @@ def world() -> Iterator[tuple[zenoh.Session, Keys]]:
     (client session, keys) once the world's liveliness token is visible. Tests send their own reset."""
     with local_world() as served:
         yield served.session, served.keys
+
+
+@pytest.fixture(scope="module")
+def one_torch_thread() -> Iterator[None]:
+    """Torch on one thread: tests share two cores with other work, where its extra threads only wait
+    on each other."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)

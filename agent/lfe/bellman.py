@@ -139,6 +139,27 @@ def plan(area: ArrayLike, d_in: ArrayLike, d_out: ArrayLike, distances: ArrayLik
     return Plan(int(chosen[best_action]), best[0], sequence, q_values)
 
 
+def choose_frontier(area: ArrayLike, d_in_m: ArrayLike, d_out_m: ArrayLike, spec: GridSpec, traversable: np.ndarray,
+                    robot_cell: tuple[int, int], centres: Sequence[tuple[int, int]], sigma: float,
+                    step_length_m: float, steps_per_move: float = STEPS_PER_MOVE) -> Plan:
+    """One whole planning step: the frontier to explore, from properties in metres and a map.
+
+    Only the ``PLANNED_FRONTIERS`` with the largest R_A enter the recursion, so only their
+    known-space distances (and the robot's) are computed: seven distance fields, once. The plan's
+    indices (``choice``, ``sequence``, ``q_values``) are into the full arrays.
+    """
+    area = _vector(area, "area")
+    chosen = largest(area)
+    cells = [tuple(robot_cell)] + [tuple(centres[i]) for i in chosen]
+    distances = metres_to_steps(distance_matrix(spec, traversable, cells), step_length_m, steps_per_move)
+    d_in = metres_to_steps(_vector(d_in_m, "d_in_m", len(area))[chosen], step_length_m, steps_per_move)
+    d_out = metres_to_steps(_vector(d_out_m, "d_out_m", len(area))[chosen], step_length_m, steps_per_move)
+    best = plan(area[chosen], d_in, d_out, distances, sigma)
+    q_values = np.full(len(area), np.nan)
+    q_values[chosen] = best.q_values
+    return Plan(int(chosen[best.choice]), best.value, tuple(int(chosen[i]) for i in best.sequence), q_values)
+
+
 def greedy(area: ArrayLike) -> int:
     """The frontier with the largest R_A (PONI-Greedy, Greedy-R°); ties go to the lower index."""
     return int(np.argmax(_vector(area, "area")))

@@ -14,7 +14,7 @@ from agent.planning.paths import DistanceField, distance_field, simplify_path, t
 
 @dataclass(frozen=True)
 class ExploreConfig:
-    method: str = "semantic"  # fbe, semantic, semantic-no-lsv or semantic-no-gsv (agent.planning.semantic)
+    method: str = "semantic"  # fbe, semantic, semantic-no-lsv, semantic-no-gsv or lfe (agent.planning.semantic)
     max_step_m: float = 3.0  # path length the robot may drive between two observations
     min_frontier_distance_m: float = 0.5  # nearer frontiers are where the robot already stands
     min_frontier_size: int = 3

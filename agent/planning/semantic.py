@@ -33,12 +33,16 @@ class ExploreMethod(StrEnum):
     - ``semantic-no-gsv``: GSV = 0, so SV = exp(τ_LSV·LSV_p): values compare directions within one
       image only, and an image of irrelevant places still gets a confident best direction; the
       paper finds this myopic (good early, then stuck in wrongly chosen places).
+    - ``lfe``: not from that paper: learning-augmented frontier exploration (`agent.lfe.explore`),
+      the Bellman recursion over the area and time the shipped network predicts beyond each
+      frontier. It covers the home fast but knows nothing of the question.
     """
 
     FBE = "fbe"
     SEMANTIC = "semantic"
     SEMANTIC_NO_LSV = "semantic-no-lsv"
     SEMANTIC_NO_GSV = "semantic-no-gsv"
+    LFE = "lfe"
 
 
 @dataclass(frozen=True)
@@ -54,7 +58,7 @@ def method_flags(method: ExploreMethod | str) -> MethodFlags:
     return MethodFlags(
         use_lsv=method in (ExploreMethod.SEMANTIC, ExploreMethod.SEMANTIC_NO_GSV),
         use_gsv=method in (ExploreMethod.SEMANTIC, ExploreMethod.SEMANTIC_NO_LSV),
-        use_semantic=method is not ExploreMethod.FBE,
+        use_semantic=method not in (ExploreMethod.FBE, ExploreMethod.LFE),
     )
 
 

@@ -1,0 +1,198 @@
+"""`homebot eval coverage`: the coverage task of learning-augmented exploration, the paper's Table I.
+
+Each method explores the same homes from the same start with a 360° sensor for 500 steps, and the
+score is the share of the home's free floor it has observed (`agent.lfe.coverage`). Homes come in
+three sizes by floor area; their seeds are far from the training data's (which start at 0), so no
+home is evaluated that the network was trained on. One result row per (home, method) is appended
+as it finishes, and a rerun resumes where the last one stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import sys
+import time
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agent.acsg.metrics import mean_and_sem
+from agent.eval.runner import read_results
+from agent.lfe.methods import Method
+
+#: Floor area (m²) of each size of home: the generator's 60-300 m² in three bands.
+SIZES: dict[str, tuple[float, float]] = {"small": (60.0, 100.0), "medium": (100.0, 180.0), "large": (180.0, 300.0)}
+#: Homes are seeded from here on: training homes (`homebot lfe data`) take seeds 0, 1, 2, ...
+SEED_BASE = 1_000_000
+#: Coverage % of the paper's Table I (360° sensor, 500 steps): small, medium, large, overall.
+PAPER = {Method.FBE_NEAR: (92.7, 74.8, 61.0, 76.8), Method.GREEDY: (95.8, 72.3, 56.7, 74.4),
+         Method.LFE: (97.4, 75.1, 70.9, 80.7), Method.LFE_ORACLE: (95.2, 84.0, 79.5, 86.2)}
+CURVE_EVERY = 10  # steps between the points of a stored coverage curve
+RESULTS = "coverage-results.jsonl"
+
+
+@dataclass(frozen=True)
+class CoverageJob:
+    """One episode of the evaluation: a home of a size, explored by a method."""
+
+    size: str
+    seed: int
+    method: str
+    steps: int = 500  # the step budget
+
+
+def jobs(homes_per_size: int, methods: Iterable[str], steps: int = 500) -> list[CoverageJob]:
+    """Every (home, method) pair, homes in size order, methods in the given order per home."""
+    methods = list(methods)
+    return [CoverageJob(size, SEED_BASE + 1000 * band + index, method, steps)
+            for band, size in enumerate(SIZES) for index in range(homes_per_size) for method in methods]
+
+
+def home_area(size: str, seed: int) -> float:
+    """The floor area of the home of ``seed``, drawn within its size band."""
+    low, high = SIZES[size]
+    return float(np.random.default_rng(seed).uniform(low, high))
+
+
+_ESTIMATORS: dict[str, Any] = {}  # per process: one network, loaded on the first learned episode
+
+
+def run_job(job: CoverageJob, model: Path | None) -> dict[str, Any]:
+    """One result row: the home of ``job`` explored by its method."""
+    import torch
+
+    from agent.lfe.coverage import CoverageConfig, TrueHome, run_coverage
+    from agent.lfe.estimator import LearnedEstimator
+    from agent.lfe.methods import make_chooser
+    from worlds.home import generate_home
+
+    torch.set_num_threads(1)  # one episode per core: workers, not threads, use the machine
+    started = time.monotonic()
+    config = CoverageConfig(budget_steps=job.steps)
+    home = TrueHome.from_home(generate_home(job.seed, area_m2=home_area(job.size, job.seed)), config, job.seed)
+    estimator = None
+    if job.method in (Method.LFE, Method.GREEDY):
+        key = str(model)
+        if key not in _ESTIMATORS:
+            _ESTIMATORS[key] = LearnedEstimator.load(model)
+        estimator = _ESTIMATORS[key]
+    result = run_coverage(home, make_chooser(job.method, home, estimator, config), config)
+    return {"size": job.size, "seed": job.seed, "method": job.method, "budget": job.steps,
+            "area_m2": round(home.area_m2, 2),
+            "coverage": round(100.0 * float(result.coverage[-1]), 3),
+            "curve": [round(100.0 * float(v), 3) for v in result.coverage[::CURVE_EVERY]],
+            "steps_used": result.steps_used, "exhausted": result.exhausted,
+            "plans": len(result.plan_seconds),
+            "plan_ms": round(1000.0 * float(np.mean(result.plan_seconds)), 3) if result.plan_seconds else 0.0,
+            "seconds": round(time.monotonic() - started, 3)}
+
+
+def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str], workers: int = 1,
+                      model: Path | None = None, steps: int = 500,
+                      progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    """Run the episodes not yet in ``<out_dir>/coverage-results.jsonl``; return the table."""
+    methods = list(methods)
+    unknown = sorted(set(methods) - set(Method))
+    if unknown or not methods:
+        raise ValueError(f"--methods: unknown {', '.join(unknown) or '(none given)'} "
+                         f"(known: {', '.join(Method)})")
+    if homes_per_size < 1:
+        raise ValueError(f"--homes: {homes_per_size} must be at least 1")
+    if workers < 1:
+        raise ValueError(f"--workers: {workers} must be at least 1")
+    if steps < 1:
+        raise ValueError(f"--steps: {steps} must be at least 1")
+    if model is not None and not model.is_file():
+        raise ValueError(f"--model: {model} is not a file")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / RESULTS
+    done = {_key(r) for r in read_results(path)}
+    wanted = jobs(homes_per_size, methods, steps)
+    todo = [job for job in wanted if (job.size, job.seed, job.method, job.steps) not in done]
+    with open(path, "a", encoding="utf-8") as out:
+        for number, row in enumerate(_rows(todo, workers, model), start=1):
+            out.write(json.dumps(row) + "\n")
+            out.flush()
+            if progress:
+                progress(number, len(todo), row)
+    keys = {(job.size, job.seed, job.method, job.steps) for job in wanted}
+    rows = [r for r in read_results(path) if _key(r) in keys]
+    return {"table": coverage_table(rows, methods), "rows": rows, "results": str(path), "n": len(rows)}
+
+
+def _key(row: dict[str, Any]) -> tuple[str, int, str, int]:
+    return row["size"], row["seed"], row["method"], row["budget"]
+
+
+def _rows(todo: list[CoverageJob], workers: int, model: Path | None) -> Iterator[dict[str, Any]]:
+    """Result rows as the episodes finish, in worker processes when there are several."""
+    if workers == 1 or len(todo) <= 1:
+        for job in todo:
+            yield run_job(job, model)
+        return
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context) as pool:
+        futures = [pool.submit(run_job, job, model) for job in todo]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+def coverage_table(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, dict[str, tuple[float, float]]]:
+    """Method -> size (and "overall", over every home) -> (mean coverage %, standard error)."""
+    table: dict[str, dict[str, tuple[float, float]]] = {}
+    for method in methods:
+        mine = [r for r in rows if r["method"] == method]
+        if not mine:
+            continue
+        table[method] = {size: mean_and_sem(r["coverage"] for r in mine if r["size"] == size)
+                         for size in SIZES if any(r["size"] == size for r in mine)}
+        table[method]["overall"] = mean_and_sem(r["coverage"] for r in mine)
+    return table
+
+
+def format_table(table: dict[str, dict[str, tuple[float, float]]]) -> str:
+    """Our coverage beside the paper's, as a Markdown table a person can paste into a note."""
+    columns = [*SIZES, "overall"]
+    lines = ["| method | " + " | ".join(columns) + " | paper (" + " / ".join(columns) + ") |",
+             "|---" * (len(columns) + 2) + "|"]
+    for method, row in table.items():
+        cells = [f"{row[c][0]:.1f} ± {row[c][1]:.1f}" if c in row else "–" for c in columns]
+        paper = " / ".join(f"{v:.1f}" for v in PAPER[Method(method)])
+        lines.append(f"| {method} | " + " | ".join(cells) + f" | {paper} |")
+    return "\n".join(lines)
+
+
+def plot_curves(rows: list[dict[str, Any]], methods: list[str], path: Path) -> Path:
+    """Mean coverage against steps, one panel per size, one line per method."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(4.2 * len(SIZES), 3.6), layout="constrained")
+    axes = figure.subplots(1, len(SIZES), sharey=True)
+    for ax, size in zip(axes, SIZES):
+        for method in methods:
+            curves = [r["curve"] for r in rows if r["size"] == size and r["method"] == method]
+            if not curves:
+                continue
+            mean = np.mean(np.asarray(curves, dtype=float), axis=0)
+            ax.plot(np.arange(len(mean)) * CURVE_EVERY, mean, label=f"{method} ({mean[-1]:.1f} %)")
+        homes = len({r["seed"] for r in rows if r["size"] == size})
+        low, high = SIZES[size]
+        ax.set_title(f"{size} homes, {low:g}-{high:g} m² (n={homes})")
+        ax.set_xlabel("steps")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="lower right", fontsize=8)
+    axes[0].set_ylabel("coverage (% of free floor seen)")
+    figure.savefig(path, dpi=120)
+    return path
+
+
+def print_progress(done: int, total: int, row: dict[str, Any]) -> None:
+    end = "\n" if done == total else ""
+    sys.stderr.write(f"\r  {done}/{total} episodes, last {row['size']} home {row['seed']} {row['method']}: "
+                     f"{row['coverage']:.1f} % in {row['seconds']:.0f} s   {end}")
+    sys.stderr.flush()
