@@ -219,8 +219,7 @@ def _run(args: argparse.Namespace) -> int:
     from agent.runtime.run import RunError, RunRequest, run_episode
     from agent.runtime.progress import StepPrinter
 
-    if args.method:
-        args.set.append(f"explore.method={args.method}")
+    args.set.extend(shortcut_overrides(args))
     config = _load(args)
     request = RunRequest(seed=args.seed, config=config, out_root=args.out, connect=args.connect,
                          namespace=args.namespace)
@@ -239,6 +238,12 @@ def _run(args: argparse.Namespace) -> int:
         print(f"episode failed: {result['reason']}", file=sys.stderr)
     print(f"run folder: {result['folder']}")
     return 0 if result["status"] == "answered" else 1
+
+
+def shortcut_overrides(args: argparse.Namespace) -> list[str]:
+    """The ``--set`` overrides that ``run``'s shortcut options (--method, --stop, --epsilon) stand for."""
+    shortcuts = {"explore.method": args.method, "stop.rule": args.stop, "stop.epsilon": args.epsilon}
+    return [f"{key}={value}" for key, value in shortcuts.items() if value is not None]
 
 
 def _skills(args: argparse.Namespace) -> int:

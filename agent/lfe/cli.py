@@ -36,6 +36,9 @@ def _parser() -> argparse.ArgumentParser:
     train.add_argument("--minutes", type=float, help="stop after this long, keeping the best model so far")
     train.add_argument("--device", help="cpu, cuda or auto (default auto: a GPU when there is one)")
     train.add_argument("--seed", type=int, help="split, initialisation and crops (default 0)")
+    train.add_argument("--steps-per-epoch", type=int, help="optimiser steps per epoch (default 120)")
+    train.add_argument("--batch-size", type=int, help="crops per step (default 16)")
+    train.add_argument("--crop", type=int, help="side of a training crop in cells (default 128)")
     return parser
 
 
@@ -80,7 +83,8 @@ def _train(args: argparse.Namespace) -> int:
 
     from agent.lfe.train import TrainConfig, train
 
-    overrides = {"epochs": args.epochs, "max_minutes": args.minutes, "device": args.device, "seed": args.seed}
+    overrides = {"epochs": args.epochs, "max_minutes": args.minutes, "device": args.device, "seed": args.seed,
+                 "steps_per_epoch": args.steps_per_epoch, "batch_size": args.batch_size, "crop": args.crop}
     config = replace(TrainConfig(), **{k: v for k, v in overrides.items() if v is not None})
 
     result = train(args.data, args.out, config, print_training)
