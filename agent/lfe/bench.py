@@ -6,8 +6,9 @@ distance field for the robot and each of the up to six frontiers planned over) a
 recursion. The ground-truth labelling the oracle uses is timed on the same maps, for comparison.
 
 The paper's reference code re-plans every known-space path on every branch of the recursion; the
-cost of doing that here is estimated as (branches evaluated) × (time of one distance field), and
-shown as a ratio to what computing the distances once costs.
+cost of doing that here is estimated as (branches of the full recursion) × (time of one distance
+field), an upper bound since branches that run out of time end early, and shown as a ratio to the
+step as computed here.
 """
 
 from __future__ import annotations
@@ -119,6 +120,7 @@ def format_plan_table(report: dict[str, Any]) -> str:
                      f"{row['per_branch_ms']:>12.0f}{row['per_branch_ratio']:>6.0f}×")
     lines.append("step = network + distances (computed once) + recursion; oracle = the ground-truth labelling "
                  "LFE-(R°, D°) plans with;")
-    lines.append("per-branch = estimated cost of re-planning each path on every branch, as the paper's reference "
-                 "code does (ratio to step).")
+    lines.append("per-branch = estimated cost of re-planning each path on every branch of the full recursion, as "
+                 "the paper's reference code does")
+    lines.append("(ratio to step; an upper bound, since branches that run out of time end early).")
     return "\n".join(lines)
