@@ -294,8 +294,8 @@ def test_method_flags() -> None:
     assert method_flags("fbe") == method_flags(ExploreMethod.FBE)
     flags = {m.value: method_flags(m) for m in ExploreMethod}
     assert [(f.use_lsv, f.use_gsv, f.use_semantic) for f in flags.values()] == [
-        (False, False, False), (True, True, True), (False, True, True), (True, False, True)]
-    assert list(flags) == ["fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv"]
+        (False, False, False), (True, True, True), (False, True, True), (True, False, True), (False, False, False)]
+    assert list(flags) == ["fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv", "lfe"]
     with pytest.raises(ValueError):
         method_flags("clip-fbe")
 
