@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from itertools import combinations
 
 import numpy as np
@@ -395,7 +396,7 @@ def test_semantic_choice_on_reachable_frontiers() -> None:
     probabilities = picks[0][1]
     assert probabilities.sum() == pytest.approx(1.0) and probabilities[right] > 0.6
     assert sum(index == right for index, _ in picks) > 100
-    empty = type(candidates)([], np.zeros(0), candidates.field)
+    empty = replace(candidates, frontiers=[], distances_m=np.zeros(0))
     index, weights = semantic_choice(empty, semantic_map, FrontierWeightConfig(), rng)
     assert index is None and len(weights) == 0
 

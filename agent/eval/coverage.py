@@ -10,11 +10,9 @@ as it finishes, and a rerun resumes where the last one stopped.
 from __future__ import annotations
 
 import json
-import multiprocessing
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +22,7 @@ import numpy as np
 from agent.acsg.metrics import mean_and_sem
 from agent.eval.runner import read_results
 from agent.lfe.methods import Method
+from agent.runtime.pool import as_finished
 
 #: Floor area (m²) of each size of home: the generator's 60-300 m² in three bands.
 SIZES: dict[str, tuple[float, float]] = {"small": (60.0, 100.0), "medium": (100.0, 180.0), "large": (180.0, 300.0)}
@@ -115,7 +114,7 @@ def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str]
     wanted = jobs(homes_per_size, methods, steps)
     todo = [job for job in wanted if (job.size, job.seed, job.method, job.steps) not in done]
     with open(path, "a", encoding="utf-8") as out:
-        for number, row in enumerate(_rows(todo, workers, model), start=1):
+        for number, (_, row) in enumerate(as_finished(run_job, [(job, model) for job in todo], workers), start=1):
             out.write(json.dumps(row) + "\n")
             out.flush()
             if progress:
@@ -127,19 +126,6 @@ def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str]
 
 def _key(row: dict[str, Any]) -> tuple[str, int, str, int]:
     return row["size"], row["seed"], row["method"], row["budget"]
-
-
-def _rows(todo: list[CoverageJob], workers: int, model: Path | None) -> Iterator[dict[str, Any]]:
-    """Result rows as the episodes finish, in worker processes when there are several."""
-    if workers == 1 or len(todo) <= 1:
-        for job in todo:
-            yield run_job(job, model)
-        return
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context) as pool:
-        futures = [pool.submit(run_job, job, model) for job in todo]
-        for future in as_completed(futures):
-            yield future.result()
 
 
 def coverage_table(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, dict[str, tuple[float, float]]]:

@@ -17,11 +17,9 @@ The executor says what perceives and acts:
 from __future__ import annotations
 
 import json
-import multiprocessing
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Iterable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -32,6 +30,7 @@ from agent.acsg.graph import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene
 from agent.eval.runner import read_results
+from agent.runtime.pool import as_finished
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
 
 EXECUTORS = ("symbolic", "robot")
@@ -83,7 +82,8 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
     done = {(r["task"], r["seed"], r["executor"]) for r in read_results(path)}
     todo = [(task, seed) for task in tasks for seed in range(variants) if (task, seed, executor) not in done]
     with open(path, "a", encoding="utf-8") as out:
-        for number, row in enumerate(_rows(executor, todo, workers), start=1):
+        calls = [(executor, task, seed) for task, seed in todo]  # scenes in processes of their own
+        for number, (_, row) in enumerate(as_finished(run_scene, calls, workers), start=1):
             out.write(json.dumps(row) + "\n")
             out.flush()
             if progress:
@@ -91,19 +91,6 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
     wanted = {(task, seed) for task in tasks for seed in range(variants)}
     rows = [r for r in read_results(path) if r["executor"] == executor and (r["task"], r["seed"]) in wanted]
     return {"table": table(rows, tasks), "results": str(path), "n": len(rows)}
-
-
-def _rows(executor: str, todo: list[tuple[str, int]], workers: int) -> Iterator[dict[str, Any]]:
-    """Result rows as the scenes finish, in worker processes when there are several."""
-    if workers == 1 or len(todo) <= 1:
-        for task, seed in todo:
-            yield run_scene(executor, task, seed)
-        return
-    context = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked Zenoh or PyBullet state
-    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context) as pool:
-        futures = [pool.submit(run_scene, executor, task, seed) for task, seed in todo]
-        for future in as_completed(futures):
-            yield future.result()
 
 
 def table(rows: list[dict[str, Any]], tasks: list[str]) -> dict[str, dict[str, tuple[float, float]]]:

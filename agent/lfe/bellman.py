@@ -18,6 +18,7 @@ looks them up, where the paper's reference code re-plans every path on every bra
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,7 @@ from numpy.typing import ArrayLike
 
 from agent.mapping.grid import GridSpec
 from agent.planning.paths import distance_field
+from agent.runtime.timing import StageTimer
 
 STEPS_PER_MOVE = 1.7
 """Time steps per forward move, turns included: the paper's empirical distance-to-steps ratio."""
@@ -141,20 +143,24 @@ def plan(area: ArrayLike, d_in: ArrayLike, d_out: ArrayLike, distances: ArrayLik
 
 def choose_frontier(area: ArrayLike, d_in_m: ArrayLike, d_out_m: ArrayLike, spec: GridSpec, traversable: np.ndarray,
                     robot_cell: tuple[int, int], centres: Sequence[tuple[int, int]], sigma: float,
-                    step_length_m: float, steps_per_move: float = STEPS_PER_MOVE) -> Plan:
+                    step_length_m: float, steps_per_move: float = STEPS_PER_MOVE,
+                    timer: StageTimer | None = None) -> Plan:
     """One whole planning step: the frontier to explore, from properties in metres and a map.
 
     Only the ``PLANNED_FRONTIERS`` with the largest R_A enter the recursion, so only their
     known-space distances (and the robot's) are computed: seven distance fields, once. The plan's
-    indices (``choice``, ``sequence``, ``q_values``) are into the full arrays.
+    indices (``choice``, ``sequence``, ``q_values``) are into the full arrays. ``timer`` times the
+    two parts, "distances" and "recursion" (`homebot bench plan`).
     """
     area = _vector(area, "area")
     chosen = largest(area)
     cells = [tuple(robot_cell)] + [tuple(centres[i]) for i in chosen]
-    distances = metres_to_steps(distance_matrix(spec, traversable, cells), step_length_m, steps_per_move)
+    with timer.measure("distances") if timer else nullcontext():
+        distances = metres_to_steps(distance_matrix(spec, traversable, cells), step_length_m, steps_per_move)
     d_in = metres_to_steps(_vector(d_in_m, "d_in_m", len(area))[chosen], step_length_m, steps_per_move)
     d_out = metres_to_steps(_vector(d_out_m, "d_out_m", len(area))[chosen], step_length_m, steps_per_move)
-    best = plan(area[chosen], d_in, d_out, distances, sigma)
+    with timer.measure("recursion") if timer else nullcontext():
+        best = plan(area[chosen], d_in, d_out, distances, sigma)
     q_values = np.full(len(area), np.nan)
     q_values[chosen] = best.q_values
     return Plan(int(chosen[best.choice]), best.value, tuple(int(chosen[i]) for i in best.sequence), q_values)

@@ -42,10 +42,11 @@ import numpy as np
 from scipy import ndimage
 from skimage.graph import MCP_Geometric
 
+from agent.lfe.bellman import nearest
 from agent.lfe.sensor import PanoramicSensor
 from agent.mapping.grid import GridSpec
 from agent.planning.frontier import Frontier, cluster_frontiers, frontier_cells
-from agent.planning.paths import distance_field
+from agent.planning.paths import clearance_cost, distance_field
 from worlds.freespace import free_space
 from worlds.home import HomeSpec
 from worlds.robot import ROBOT_RADIUS
@@ -245,7 +246,7 @@ def stopping_cell(pose: Pose, clearance_m: np.ndarray, spec: GridSpec,
 
 def fbe_near(situation: Situation) -> int:
     """FBE-Near: the frontier with the shortest known-space path (ties: the lower index)."""
-    return int(np.argmin(situation.from_robot_m))
+    return nearest(situation.from_robot_m)
 
 
 def run_coverage(home: TrueHome, choose: FrontierChooser, config: CoverageConfig = CoverageConfig(),
@@ -407,8 +408,8 @@ class _Robot:
         the whole map (the field `situation` needs is the whole map anyway).
         """
         clearance, traversable = self._planning_maps()
-        margin = (clearance - self.config.robot_radius_m) / _COMFORT_M
-        costs = np.where(traversable, 1.0 + _WALL_COST * np.clip(1.0 - margin, 0.0, 1.0), np.inf)
+        costs = np.where(traversable, clearance_cost(clearance, self.config.robot_radius_m, _COMFORT_M, _WALL_COST),
+                         np.inf)
         cell = self.cell
         costs[cell] = 1.0
         search = MCP_Geometric(costs, fully_connected=True)

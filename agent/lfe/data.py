@@ -22,10 +22,8 @@ half shard, and a rerun skips the homes whose shard is there.
 
 from __future__ import annotations
 
-import multiprocessing
 import time
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,6 +31,7 @@ import numpy as np
 
 from agent.lfe.coverage import CoverageConfig, FrontierChooser, Situation, TrueHome, fbe_near, run_coverage
 from agent.lfe.properties import label_frontiers
+from agent.runtime.pool import as_finished
 from agent.lfe.shards import shard_path, write_shard
 from agent.lfe.raster import coarse_cells, coarsening_factor, encode_map, frontier_pixel_mask
 from worlds.home import generate_home
@@ -125,7 +124,7 @@ def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = D
         if progress is not None:
             progress(done, len(unique), 0)
     written, snapshots, pixels = [], 0, 0
-    for seed, arrays in _explore(todo, config, workers):
+    for (seed, _), arrays in as_finished(home_samples, [(seed, config) for seed in todo], workers):
         write_shard(shard_path(out_dir, seed), arrays)
         written.append(seed)
         snapshots += len(arrays["maps"])
@@ -203,24 +202,3 @@ def _noisy_nearest(rng: np.random.Generator, noise: float) -> FrontierChooser:
         return fbe_near(situation)
 
     return choose
-
-
-def _explore(seeds: list[int], config: DataConfig, workers: int) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
-    """(seed, shard arrays) for each seed, as each home finishes: here, or in ``workers`` processes.
-
-    Processes are spawned, not forked: the caller may hold threads (a progress bar, a torch pool)
-    that a fork would copy in a locked state.
-    """
-    if workers == 1 or len(seeds) <= 1:
-        for seed in seeds:
-            yield seed, home_samples(seed, config)
-        return
-    pool = ProcessPoolExecutor(min(workers, len(seeds)), mp_context=multiprocessing.get_context("spawn"))
-    try:
-        pending = {pool.submit(home_samples, seed, config): seed for seed in seeds}
-        while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                yield pending.pop(future), future.result()
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)

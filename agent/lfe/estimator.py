@@ -25,7 +25,7 @@ import numpy as np
 import torch
 
 from agent.lfe.model import FrontierUNet, UNetConfig, encode_input, from_network, load_model, map_window
-from agent.lfe.properties import FrontierProperties, _cells
+from agent.lfe.properties import FrontierProperties, frontier_cells_of
 from agent.lfe.raster import UNKNOWN, coarse_cells, coarsening_factor, encode_map, frontier_pixel_mask
 from agent.planning.frontier import Frontier
 
@@ -69,7 +69,7 @@ class LearnedEstimator:
         encoded = encode_map(free, occupied, resolution, self.config.model_resolution)
         factor = coarsening_factor(resolution, self.config.model_resolution)
         on_frontier = frontier_pixel_mask(encoded)
-        pixels = [_frontier_pixels(coarse_cells(_cells(frontier, np.shape(free)), factor), on_frontier)
+        pixels = [_frontier_pixels(coarse_cells(frontier_cells_of(frontier, np.shape(free)), factor), on_frontier)
                   for frontier in frontiers]
         corner, window = self._window(encoded, np.concatenate(pixels))
         mask = np.zeros(window.shape, dtype=bool)

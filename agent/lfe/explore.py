@@ -21,6 +21,6 @@ def lfe_frontier(world_map: ExplorationMap, robot_xy: tuple[float, float], candi
                                     candidates.frontiers)
     robot_cell = tuple(int(v) for v in world_map.spec.to_cell(robot_xy))
     return choose_frontier([p.area_m2 for p in properties], [p.d_in_m for p in properties],
-                           [p.d_out_m for p in properties], world_map.spec, world_map.traversable(robot_xy),
+                           [p.d_out_m for p in properties], world_map.spec, candidates.traversable,
                            robot_cell, [f.centre for f in candidates.frontiers], max(steps_left, 1),
                            step_length_m, steps_per_move=1.0)

@@ -109,7 +109,7 @@ def unseen_space(free: np.ndarray, observed: np.ndarray, resolution: float) -> U
 
 def region_beyond(space: UnseenSpace, frontier: Frontier | np.ndarray) -> np.ndarray:
     """The bool mask of unseen free space beyond a frontier (the regions its cells touch)."""
-    return np.isin(space.labels, _touching_regions(space, _cells(frontier, space.labels.shape)))
+    return np.isin(space.labels, _touching_regions(space, frontier_cells_of(frontier, space.labels.shape)))
 
 
 def frontier_properties(space: UnseenSpace, frontier: Frontier | np.ndarray) -> FrontierProperties:
@@ -122,7 +122,7 @@ def frontier_properties(space: UnseenSpace, frontier: Frontier | np.ndarray) -> 
     comes back out of all but the last; the last is the one with the longest way out, which keeps
     D_in smallest.
     """
-    cells = _cells(frontier, space.labels.shape)
+    cells = frontier_cells_of(frontier, space.labels.shape)
     regions = _touching_regions(space, cells)
     area = float(space.sizes[regions].sum()) * space.resolution**2
     legs = [_piece_tour(space, piece, cells) for region in regions for piece in space.pieces_of_region.get(region, [])]
@@ -319,7 +319,7 @@ def _touching_regions(space: UnseenSpace, cells: np.ndarray) -> np.ndarray:
     return found[found > 0]
 
 
-def _cells(frontier: Frontier | np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+def frontier_cells_of(frontier: Frontier | np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
     """A frontier's (K, 2) integer cells, checked against the grid."""
     cells = np.asarray(frontier.cells if isinstance(frontier, Frontier) else frontier)
     if cells.ndim != 2 or cells.shape[1] != 2 or len(cells) == 0:

@@ -9,7 +9,7 @@ import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.frontier import Frontier, cluster_frontiers, frontier_cells
-from agent.planning.paths import DistanceField, distance_field, simplify_path, truncate_path
+from agent.planning.paths import DistanceField, clearance_cost, distance_field, simplify_path, truncate_path
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,7 @@ class Candidates:
     frontiers: list[Frontier]
     distances_m: np.ndarray
     field: DistanceField
+    traversable: np.ndarray  # the cells the field was computed over
 
 
 @dataclass(frozen=True)
@@ -54,15 +55,15 @@ def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float]
     spec = world_map.spec
     start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
     clearance = world_map.clearance()
-    margin = (clearance - world_map.config.robot_radius) / config.comfort_m
-    cell_cost = 1.0 + config.obstacle_cost * np.clip(1.0 - margin, 0.0, 1.0)
-    field = distance_field(spec, world_map.traversable(robot_xy, clearance), start, cell_cost)
+    cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
+    traversable = world_map.traversable(robot_xy, clearance)
+    field = distance_field(spec, traversable, start, cell_cost)
     reachable = np.isfinite(field.metres)
     mask = frontier_cells(reachable, world_map.explored, world_map.occupied, config.min_unexplored_neighbours)
     frontiers = cluster_frontiers(spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)
     distances = np.array([field.metres[f.centre] for f in frontiers])
     keep = distances >= config.min_frontier_distance_m
-    return Candidates([f for f, k in zip(frontiers, keep) if k], distances[keep], field)
+    return Candidates([f for f, k in zip(frontiers, keep) if k], distances[keep], field, traversable)
 
 
 def nearest_frontier(candidates: Candidates) -> int | None:

@@ -40,6 +40,16 @@ def distance_field(spec: GridSpec, traversable: np.ndarray, start: tuple[int, in
     return DistanceField(spec, start, cumulative * spec.resolution, mcp)
 
 
+def clearance_cost(clearance_m: np.ndarray, radius_m: float, comfort_m: float, obstacle_cost: float) -> np.ndarray:
+    """A cost per cell (≥ 1) that keeps paths off obstacles where there is room.
+
+    1 where a cell is more than ``radius_m + comfort_m`` from the nearest obstacle, rising linearly
+    to ``1 + obstacle_cost`` at ``radius_m``: a path hugs a wall only when nothing wider leads on.
+    """
+    margin = (clearance_m - radius_m) / comfort_m
+    return 1.0 + obstacle_cost * np.clip(1.0 - margin, 0.0, 1.0)
+
+
 def truncate_path(points_xy: np.ndarray, max_length_m: float) -> np.ndarray:
     """The prefix of a polyline whose length is at most ``max_length_m``, ending exactly there."""
     if len(points_xy) < 2:
