@@ -27,7 +27,8 @@ The primitives (RoboEXP's seven, §2 of the spec):
   `TILTS`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
   turn until one chain is reachable throughout. With ``surface_z`` (a table's top) variants whose
   hand would come down onto it are refused (`HAND_BOXES`): a bar less than ~9 cm above the table
-  cannot be grasped by a Panda hand 21 cm tall across its fingers;
+  cannot be grasped by a Panda hand 21 cm tall across its fingers. An opening may end holding the
+  handle (``hold``); `ArmPlanner.plan_close_held` then pushes the part shut from that grasp;
 - pick an object away / back (`ArmPlanner.plan_pick`): top-down. Above the object, down onto its
   top (the fingers closing across the line of sight from the robot where the object fits that way,
   since perception places things worst along it), close, lift, carry at height, lower until the
@@ -95,6 +96,9 @@ BODY_RADIUS_M = 0.28
 SURFACE_CLEARANCE_M = 0.01
 #: Random IK restarts tried for a handle's grasp, per grasp variant, after the structured seeds.
 PART_RESTARTS = 4
+#: A part's path solved anew is the one the arm holding it is on when it passes within this (rad or
+#: m, any joint) of where the arm is.
+HELD_MATCH_RAD = 0.05
 #: The gripper's opening between the fingers (m); objects wider than this less a margin are refused.
 GRIPPER_OPENING_M = 0.08
 #: Speeds as fractions of the joints' velocity limits: free moves, and moves near or holding things.
@@ -319,13 +323,59 @@ class ArmPlanner:
     # -- the primitives ----------------------------------------------------------------------------
 
     def plan_open(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, amount: float, *,
-                  surface_z: float | None = None, skill: str | None = None) -> SkillPlan:
+                  surface_z: float | None = None, skill: str | None = None, hold: bool = False) -> SkillPlan:
         """Open the part ``geometry`` (as seen closed) by ``amount`` (m for drawers, rad for doors).
 
         ``surface_z``: the top of what the furniture stands on (a table); the hand keeps above it.
+        With ``hold`` the plan ends holding the handle, the part pulled open (no letting go, no
+        backing off): it cannot swing on or be knocked while the robot looks, and
+        `plan_close_held` shuts it again without a second grasp.
         """
         _check_amount(geometry, amount)
-        return self._part(q, base_pose, geometry, 0.0, float(amount), skill or f"open_{geometry.kind}", surface_z)
+        return self._part(q, base_pose, geometry, 0.0, float(amount), skill or f"open_{geometry.kind}", surface_z,
+                          hold)
+
+    def plan_close_held(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, amount: float, *,
+                        surface_z: float | None = None, skill: str | None = None) -> SkillPlan:
+        """Shut a part that stands open by ``amount`` with the hand on its handle (``geometry`` as
+        seen closed): the hand rides the handle back along the part's path from the grasp it has
+        now (whichever variant the opening took, read off ``q``), lets go and backs off as
+        `plan_close` would. ``surface_z`` as for `plan_open`."""
+        _check_amount(geometry, amount)
+        what = f"{geometry.kind} handle"
+        builder = _Builder(self, q, base_pose, surface_z)
+        grasp = builder.base @ self.kin.forward(builder.q)
+        held = np.linalg.inv(grasp_pose(moved_geometry(geometry, amount))) @ grasp
+        step = LINE_STEP_M if geometry.kind == "drawer" else ARC_STEP_RAD
+        values = np.linspace(0.0, float(amount), max(1, math.ceil(amount / step - 1e-9)) + 1)
+        poses = [grasp_pose(moved_geometry(geometry, float(v))) @ held for v in values]
+        try:
+            swept = builder.path(builder.q, poses[::-1][1:], f"closing path of {what}")
+        except SkillPlanError as error:
+            swept = self._retraced(builder, poses, what, error)
+        retreat = self._off(builder, swept[-1], poses[0], f"retreat from {what}")
+        builder.move(f"push the {geometry.kind} closed", swept, careful=True, tcp_target=poses[0],
+                     part_motion=PartMotion(geometry, poses[0][:3, 3], float(amount), 0.0))
+        builder.gripper("open", f"let go of the {what}")
+        builder.move(f"back off the {what}", retreat, careful=True,
+                     tcp_target=builder.base @ self.kin.forward(retreat[-1]))
+        info = {"grasp_pose": grasp, "release_pose": poses[0], "kind": geometry.kind, "start": float(amount),
+                "end": 0.0, "held": True}
+        return builder.finish(skill or f"close_{geometry.kind}", info)
+
+    def _retraced(self, builder: _Builder, poses: list[np.ndarray], what: str, error: SkillPlanError) -> np.ndarray:
+        """The joint path of ``poses`` (closed to open) solved outwards from the closed grasp as an
+        opening solves it, reversed: IK tracked backwards from the open end of a redundant arm
+        drifts and may jump where the opening's own path did not. Taken only when it ends (at the
+        open end) where the arm is; else ``error``."""
+        for closed in builder.solutions(poses[0], f"grasp pose of {what}", restarts=PART_RESTARTS):
+            try:
+                out = builder.path(closed, poses[1:], f"opening path of {what}")
+            except SkillPlanError:
+                continue
+            if np.abs(out[-1] - builder.q).max() < HELD_MATCH_RAD:
+                return out[::-1]
+        raise error
 
     def plan_close(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, amount: float, *,
                    geometry_is_open: bool = False, surface_z: float | None = None,
@@ -437,8 +487,9 @@ class ArmPlanner:
         return builder.finish(skill, {"goal": joints})
 
     def _part(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, start: float, end: float,
-              skill: str, surface_z: float | None) -> SkillPlan:
-        """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``.
+              skill: str, surface_z: float | None, hold: bool = False) -> SkillPlan:
+        """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
+        and (unless ``hold``) let go and back off.
 
         Whichever way the part moves, the chain is solved from the closed grasp outwards (the grasp,
         then the part's path to its open end, then the straight lines off either end of it) and
@@ -477,11 +528,12 @@ class ArmPlanner:
                 builder.gripper("close", f"grasp the {what}", expect_held="handle")
                 builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
                              swept if opening else swept[::-1], careful=True, tcp_target=release, part_motion=motion)
-                builder.gripper("open", f"let go of the {what}")
-                builder.move(f"back off the {what}", retreat, careful=True,
-                             tcp_target=builder.base @ self.kin.forward(retreat[-1]))
+                if not hold:
+                    builder.gripper("open", f"let go of the {what}")
+                    builder.move(f"back off the {what}", retreat, careful=True,
+                                 tcp_target=builder.base @ self.kin.forward(retreat[-1]))
                 info = {"grasp_pose": grasp, "release_pose": release, "flip": flip, "tilt": tilt,
-                        "kind": geometry.kind, "start": start, "end": end}
+                        "kind": geometry.kind, "start": start, "end": end, "held": hold}
                 return builder.finish(skill, info)
         raise SkillPlanError(_best_failure(failures, what))
 
@@ -540,13 +592,19 @@ _HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
                           for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
 
 
+def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
+    """The corners (16, 3) of the hand's and open fingers' boxes (`HAND_BOXES`) with the TCP at
+    ``tcp_pose`` (world frame)."""
+    return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+
+
 def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
     """The lowest point of the hand and open fingers (`HAND_BOXES`) with the TCP at ``tcp_pose`` (world z).
 
     With ``base`` (the base's 4x4 world pose) only the corners further than ``body_radius`` from
     its axis count: over the robot's own body there is no table (the stowed arm sits inside it).
     """
-    corners = _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+    corners = hand_corners(tcp_pose)
     if base is not None:
         corners = corners[np.hypot(corners[:, 0] - base[0, 3], corners[:, 1] - base[1, 3]) > body_radius]
     return float(corners[:, 2].min()) if len(corners) else math.inf

@@ -9,9 +9,11 @@ which `skills.plan.ArmPlanner` method plans it. ``skill_name`` is the ACSG's pri
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
+from agent.runtime.world_link import WorldLink
 from skills.base import ArmSkill, SkillResult, SkillTarget
 from skills.plan import ArmPlanner, SkillPlan, SkillPlanError
 
@@ -37,7 +39,14 @@ def _amount(target: SkillTarget, skill: str) -> float:
 
 
 class _OpenPart(ArmSkill):
+    """With ``hold`` the skill ends with the hand still on the handle, the part held open (for a
+    look while nothing can swing it on), for the same kind's close made with ``held``."""
+
     kind = ""
+
+    def __init__(self, link: WorldLink, name: str | None = None, *, hold: bool = False, **options: Any) -> None:
+        super().__init__(link, name, **options)
+        self.hold = hold
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
              target: SkillTarget) -> SkillPlan:
@@ -45,22 +54,34 @@ class _OpenPart(ArmSkill):
         amount = DEFAULT_AMOUNT[self.kind] if target.amount is None else float(target.amount)
         assert target.geometry is not None
         return planner.plan_open(q, base_pose, target.geometry, amount, surface_z=target.surface_z,
-                                 skill=self.skill_name)
+                                 skill=self.skill_name, hold=self.hold)
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; opened {_amount_text(self.kind, result.achieved)}"
 
 
 class _ClosePart(ArmSkill):
+    """With ``held`` the hand already holds the handle (an open made with ``hold``): it pushes the
+    part shut from there instead of grasping it first."""
+
     kind = ""
+
+    def __init__(self, link: WorldLink, name: str | None = None, *, held: bool = False, **options: Any) -> None:
+        super().__init__(link, name, **options)
+        self.held = held
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
              target: SkillTarget) -> SkillPlan:
         _part(target, self.kind, self.skill_name)
         assert target.geometry is not None
-        return planner.plan_close(q, base_pose, target.geometry, _amount(target, self.skill_name),
-                                  geometry_is_open=target.geometry_is_open, surface_z=target.surface_z,
-                                  skill=self.skill_name)
+        amount = _amount(target, self.skill_name)
+        if self.held:
+            if target.geometry_is_open:
+                raise SkillPlanError(f"target: {self.skill_name} of a held part needs its geometry as seen closed")
+            return planner.plan_close_held(q, base_pose, target.geometry, amount, surface_z=target.surface_z,
+                                           skill=self.skill_name)
+        return planner.plan_close(q, base_pose, target.geometry, amount, geometry_is_open=target.geometry_is_open,
+                                  surface_z=target.surface_z, skill=self.skill_name)
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; left open {_amount_text(self.kind, result.achieved)}"

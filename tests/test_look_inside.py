@@ -4,19 +4,24 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 
+import numpy as np
 import py_trees
 import pytest
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
 from agent.observation import Observation
-from agent.runtime.local_world import local_world
+from agent.runtime.local_world import LocalWorld, local_world
 from agent.runtime.world_link import WorldLink
-from behaviours.look_inside import LookInside, storage_in_question
+from behaviours.look_inside import LookInside, room_in_question, storage_in_question
+from worlds.facts import CLOSED_SHARE
 from worlds.home import generate_home
-from worlds.scenario import make_scenario
+from worlds.scenario import Scenario, make_scenario
+from worlds.things import Furniture
 
 
 @pytest.mark.parametrize("question, storage", [
@@ -29,6 +34,16 @@ from worlds.scenario import make_scenario
 ])
 def test_the_storage_a_question_asks_what_is_in(question: str, storage: str | None) -> None:
     assert storage_in_question(question) == storage
+
+
+@pytest.mark.parametrize("question, room", [
+    ("Is there any shampoo in the cabinet in the laundry room?", "laundry room"),
+    ("What is inside the drawer chest in the second bedroom?", "second bedroom"),
+    ("Is there any milk carton in the fridge?", None),
+    ("How many cups are there in the kitchen?", None),
+])
+def test_the_room_the_storage_stands_in(question: str, room: str | None) -> None:
+    assert room_in_question(question) == room
 
 
 @pytest.fixture
@@ -50,32 +65,69 @@ def _tick(behaviour: LookInside, timeout_s: float = 240.0) -> Status:
     return behaviour.status
 
 
-@pytest.mark.slow
-def test_the_robot_opens_the_cabinet_the_question_names_and_the_view_shows_its_contents(board) -> None:
-    seed = 3
+@contextmanager
+def _before_the_storage(seed: int, board) -> Iterator[tuple[LocalWorld, WorldLink, Scenario, Furniture, Observation]]:
+    """The seed's hidden-evidence scenario with the robot 1.6 m before the storage its question
+    names, looking at it; the question and the first frame on the blackboard."""
     home = generate_home(seed)
     scenario = make_scenario(home, seed, hidden=True)
-    assert scenario.question == "What is inside the cabinet in the bathroom?" and scenario.answer_text == "basket"
-    [cabinet] = [f for f in home.furniture if f.room == scenario.target["room"] and f.category == "cabinet"]
-    x, y, _ = cabinet.center
-    facing = (x + 1.6 * math.cos(cabinet.facing), y + 1.6 * math.sin(cabinet.facing), cabinet.facing + math.pi)
+    [piece] = [f for f in home.furniture if f.room == scenario.target["room"]
+               and f.category == scenario.target["container"]]
+    x, y, _ = piece.center
+    start = (x + 1.6 * math.cos(piece.facing), y + 1.6 * math.sin(piece.facing), piece.facing + math.pi)
     with local_world() as served:
         link = WorldLink(served.session, served.keys, timeout_s=60.0)
-        link.call("reset", {"seed": seed, "scenario": replace(scenario, start_pose=facing).to_dict()})
-        first = Observation.from_message(link.call("observe", {}))
+        try:
+            link.call("reset", {"seed": seed, "scenario": replace(scenario, start_pose=start).to_dict()})
+            first = Observation.from_message(link.call("observe", {}))
+            board.set(bb.QUESTION, scenario.question)
+            board.set(bb.OBSERVATION, first)
+            yield served, link, scenario, piece, first
+        finally:
+            link.close()
+
+
+def _put_back(served: LocalWorld, link: WorldLink, piece: Furniture) -> bool:
+    """Every part of ``piece`` shut (within the world's own tolerance) and the arm folded away."""
+    parts = served.world.part_states()[piece.instance_id]
+    closed = all(parts[p.name] <= p.lower + CLOSED_SHARE * (p.upper - p.lower) for p in piece.storage.parts)
+    return closed and bool(link.call("arm_state", {}).meta["stowed"])
+
+
+@pytest.mark.slow
+def test_the_robot_opens_the_cabinet_the_question_names_and_the_view_shows_its_contents(board) -> None:
+    with _before_the_storage(3, board) as (served, link, scenario, piece, first):
+        assert scenario.question == "What is inside the cabinet in the bathroom?" and scenario.answer_text == "basket"
         assert "basket" not in {label.category for label in first.labels}  # hidden behind the door
-        board.set(bb.QUESTION, scenario.question)
-        board.set(bb.OBSERVATION, first)
         behaviour = LookInside(link)
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         inside = board.get(bb.OBSERVATION)
         assert inside is not first and "basket" in {label.category for label in inside.labels}
         [act] = board.get(bb.ACTS)
         assert act["storage"] == "cabinet" and act["outcome"].startswith("opened the cabinet's door")
+        assert act["opened"] and act["looked"] and act["closed"] and act["stage"] is None
+        # put back as found, and the robot stands where the view it leaves says it does
+        assert _put_back(served, link, piece)
+        here = Observation.from_message(link.call("observe", {}))
+        assert np.allclose(inside.base_pose, here.base_pose, atol=0.01)
         # the same door is not opened twice: with nothing else to open, the next tick fails and says why
         board.set(bb.OBSERVATION, first)
         assert _tick(behaviour) == Status.FAILURE and "no unopened cabinet" in behaviour.feedback_message
-        link.close()
+
+
+@pytest.mark.slow
+def test_a_fridge_door_wider_than_the_robot_is_swung_wide_and_shut_again(board) -> None:
+    """The fridge's door is 0.6 m wide: stood 0.85 m before its handle, the robot was struck by its
+    own hand halfway and the door stayed open. It now stands clear of the swing and holds the door
+    while it looks, so the door is shut from the same grasp."""
+    with _before_the_storage(13, board) as (served, link, scenario, piece, _):
+        assert scenario.question == "What is inside the fridge in the kitchen?"
+        behaviour = LookInside(link)
+        assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
+        [act] = board.get(bb.ACTS)
+        assert act["opened"] and act["opening_deg"] > 60.0 and act["closed"]
+        assert "bowl" in {label.category for label in board.get(bb.OBSERVATION).labels}
+        assert _put_back(served, link, piece)
 
 
 def test_a_question_about_no_storage_fails_at_once_saying_so(board) -> None:

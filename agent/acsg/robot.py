@@ -9,9 +9,17 @@ Each primitive is turned into a `SkillTarget` from what the memory holds, and th
 py_trees behaviour (`skills.base.run_skill`) while this object waits:
 
 - open a door or drawer: the part's geometry from its handle (`handle_geometry`), the base slid to
-  the part's `stand_pose`, a second look from there to refine the geometry, the skill; then the
-  wrist camera into the opening and the arm stowed again;
-- close it: the geometry and opening remembered from the open, from the same stand;
+  the part's `stand_pose` (at a table, where it already stands within reach) or, with a
+  `StandConfig`, driven to a stand clear of what the opening sweeps (`skills.stand.choose_stand`:
+  storage standing in a room), along ``routes`` over the robot's map when it has them; a second
+  look from there to refine the geometry (and, with a `StandConfig`, a second stand when the
+  refined geometry cannot be opened from the first), the skill; then the wrist camera into the
+  opening and the arm stowed again; or, with ``hold_open``, a door kept in hand, pulled open, and
+  a head-camera look while it is held;
+- close it: the geometry and opening remembered from the open, from the same stand, grasping the
+  handle anew, or pushing it shut from the grasp it is held by; a close that fails while the part
+  still stands open is tried once more, from a fresh look at how far it stands open (a door let go
+  may swing on, or be held back by something, and a grasp aimed where it was misses);
 - pick away: the base level with the object, a free spot on the surface it stands on
   (`idle_spot`, towards the robot), the grasp point on top; pick back: from where it was put down
   to where it was.
@@ -25,6 +33,7 @@ there lay inside it (the Matryoshka's smaller doll). Every skill run is kept in
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -47,11 +56,15 @@ from agent.perception.geometry import (
 )
 from agent.perception.memory import Instance, InstanceMemory
 from agent.perception.voxels import centres
+from agent.planning.route import Routes
 from agent.runtime.world_link import WorldLink
 from skills import base as skill_base
-from skills.plan import SkillPlanError, idle_spot, stand_pose
+from skills.plan import ArmPlanner, SkillPlanError, idle_spot, stand_pose
 from skills.primitives import PRIMITIVES
+from skills.stand import NoStandError, StandConfig, choose_stand
 from skills.stow import Stow
+
+log = logging.getLogger(__name__)
 
 SURFACE_LABELS = ("table", "counter")
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
@@ -65,12 +78,17 @@ class RobotConfig:
     open; the head camera sees into the rest from the start pose. A drawer's tray is best seen from
     just above it; the way to a view behind an open door passes the door itself, which the arm
     would push shut again. ``idle_toward_robot_m``: how far from the object, towards the robot,
-    the idle spot is sought first. ``stand_off_m``: how far from a part's front the base stands to
-    open it; None keeps the distance it has (at a table, where it already stands within reach)."""
+    the idle spot is sought first. ``stand``: where the base stands to open a part; None keeps
+    the distance it has, slid along the front (at a table, where it already stands within reach),
+    a `StandConfig` drives it to a stand clear of the opening (`skills.stand`). ``hold_open``: the
+    parts not looked into with the wrist camera are opened holding the handle, looked at with the
+    head camera so, and pushed shut from the same grasp: let go, a door may swing on past where
+    it was pulled, and a second grasp, aimed from a look at how far it stands open, may miss."""
 
     skill_timeout_s: float = 120.0
     look_inside: tuple[str, ...] = ("drawer",)
-    stand_off_m: float | None = None
+    stand: StandConfig | None = None
+    hold_open: bool = False
     idle_toward_robot_m: float = 0.2
 
 
@@ -80,6 +98,7 @@ class _Opened:
     amount: float  # how far it stands open
     stand: tuple[float, float, float]
     look_point: np.ndarray
+    held: bool = False  # the hand still holds its handle
 
 
 @dataclass(frozen=True)
@@ -92,14 +111,19 @@ class _Away:
 
 @dataclass
 class Robot:
-    """`Perception` and `SkillExecutor` of the robot behind ``link``; see the module docstring."""
+    """`Perception` and `SkillExecutor` of the robot behind ``link``; see the module docstring.
+    ``routes``: the paths over the robot's map from where it stands when it first looks; without
+    them the base drives straight."""
 
     link: WorldLink
     config: RobotConfig = field(default_factory=RobotConfig)
     memory: InstanceMemory = field(default_factory=InstanceMemory)
+    routes: Routes | None = None
 
     def __post_init__(self) -> None:
         self.home: tuple[float, float, float] | None = None
+        self.pose: tuple[float, float, float] | None = None  # where the base is, as the world last said
+        self._planner: ArmPlanner | None = None
         self.opened: dict[int, _Opened] = {}
         self.away: dict[int, _Away] = {}
         self.vacated: dict[int, Box] = {}
@@ -145,22 +169,41 @@ class Robot:
 
     def open_part(self, part: Instance, handle: int | None = None) -> SkillResult:
         """Stand before the door or drawer ``part``, open it by ``handle`` (its first seen handle by
-        default), look inside; the frames taken while it stood open are in `views`."""
+        default), look inside; the frames taken while it stood open are in `views`. With
+        ``hold_open`` (see `RobotConfig`) the hand may still hold the handle afterwards, until
+        `close_part`."""
         if self.home is None:
             raise SkillPlanError("the robot has not looked yet")
         if handle is None:
             handle = self._handle(None, part)
         self.views = []
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
-        stand = stand_pose(geometry, self.home, distance_m=self.config.stand_off_m)
-        self._drive(stand)
+        stand, amount = self._stand_for(geometry, self.routes)
+        self._drive(stand, self.routes)
         self._look("head")
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
         closed_centre = part.centroid
-        result = self._skill(f"open_{geometry.kind}", skill_base.SkillTarget(
-            geometry=geometry, surface_z=self._surface_z(geometry.handle_point), label=f"{part.label} {part.id}"))
+        hold = self.config.hold_open and geometry.kind not in self.config.look_inside
+        result = self._open_from_here(part, geometry, amount, hold)
+        if result.achieved is None and self.config.stand is not None:
+            # Seen from near, the handle is not quite where it seemed from afar: stand again for it.
+            try:
+                restand, amount = self._stand_for(geometry, None)
+            except SkillPlanError as error:
+                return SkillResult(False, f"{result.reason}; and then {error}")
+            if math.dist(restand[:2], stand[:2]) > 0.02 or abs(restand[2] - stand[2]) > 0.02:
+                stand = restand
+                self._drive(stand)
+                self._look("head")
+                geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
+                result = self._open_from_here(part, geometry, amount, hold)
         if result.achieved is None:
             return SkillResult(False, result.reason)
+        if result.ok and hold:  # the hand on the handle says how far the part stands open
+            self.memory.move(part.id, part_motion(geometry, result.achieved))
+            self.views.append(self._look("head"))
+            self.opened[part.id] = _Opened(geometry, result.achieved, stand, closed_centre, held=True)
+            return SkillResult(True)
         amount = self._seen_opening(geometry, part, handle, result.achieved)
         if not result.ok:
             self.opened[part.id] = _Opened(geometry, amount, stand, closed_centre)
@@ -171,23 +214,64 @@ class Robot:
             self._look_into(look)
         return SkillResult(True)
 
-    def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float) -> float:
+    def _stand_for(self, geometry: PartGeometry,
+                   routes: Routes | None) -> tuple[tuple[float, float, float], float | None]:
+        """Where to stand to open ``geometry`` and how far to open it (None: the skill's default)."""
+        assert self.home is not None
+        if self.config.stand is None:
+            return stand_pose(geometry, self.home), None
+        q = np.asarray(self.link.call("arm_state", {}).meta["positions"], dtype=float)
+        surface_z = self._surface_z(geometry.handle_point)
+        try:
+            stand = choose_stand(self.planner(), q, geometry, reachable=None if routes is None else routes.reaches,
+                                 surface_z=surface_z, config=self.config.stand)
+        except NoStandError as error:
+            if routes is None or not error.refused["unreachable"]:
+                raise
+            # None of the good places is known to be reachable (the floor by the storage unseen,
+            # say): try those the map does not know to be blocked, to be driven to straight.
+            try:
+                stand = choose_stand(self.planner(), q, geometry, surface_z=surface_z, config=self.config.stand,
+                                     reachable=lambda xy: routes.unblocked(xy) and not routes.reaches(xy))
+            except NoStandError as again:
+                raise SkillPlanError(f"{error}; nor off the map's known floor ({again.why})") from None
+        log.info("stand for the %s at (%.2f, %.2f): %s, opening %.2f, clear by %.2f m", geometry.kind,
+                 *geometry.handle_point[:2], np.round(stand.pose, 2).tolist(), stand.amount, stand.clearance_m)
+        return stand.pose, stand.amount
+
+    def _open_from_here(self, part: Instance, geometry: PartGeometry, amount: float | None,
+                        hold: bool) -> skill_base.SkillResult:
+        return self._skill(f"open_{geometry.kind}", skill_base.SkillTarget(
+            geometry=geometry, amount=amount, surface_z=self._surface_z(geometry.handle_point),
+            label=f"{part.label} {part.id}"), hold=hold)
+
+    def planner(self) -> ArmPlanner:
+        """The arm's planner, from the robot's description (asked for once)."""
+        if self._planner is None:
+            self._planner = ArmPlanner.from_description(self.link.describe().wait().meta)
+        return self._planner
+
+    def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
+                      moved: float = 0.0) -> float:
         """How far the part stands open by a head-camera look: `fit_opening` of the handle's remembered
         points onto the handle seen nearest to where the skill says it left it (else of the part's
         own points onto the part seen there), searching up to a quarter beyond the skill's figure;
-        that figure when neither is seen. The memory is told the part moved that far, then given
-        the frame."""
+        that figure when neither is seen. ``moved``: how far open the memory holds the part now (its
+        points are carried back to closed first). The memory is told the part moved to the opening
+        found, then given the frame."""
         observation = self._frame("head")
         cfg = self.memory.config
         detections = detect(observation.depth, observation.segmentation, frame_labels(observation.labels),
                             observation.intrinsics, observation.camera_to_world, cfg.voxel_m, cfg.min_pixels,
                             cfg.max_depth_m)
         motion = part_motion(geometry, reported)
+        back = np.linalg.inv(part_motion(geometry, moved))
         amount = reported
         for inst in (self.memory.get(handle), part):
             closed = inst.points()
             if len(closed) < 3:
                 continue
+            closed = closed @ back[:3, :3].T + back[:3, 3]
             expected = motion[:3, :3] @ closed.mean(axis=0) + motion[:3, 3]
             seen = [pts for pts in (centres(d.keys, cfg.voxel_m) for d in detections if d.label == inst.label)
                     if len(pts) >= 3 and np.linalg.norm(pts.mean(axis=0) - expected) <= SEEN_PART_M]
@@ -195,29 +279,58 @@ class Robot:
                 nearest = min(seen, key=lambda pts: float(np.linalg.norm(pts.mean(axis=0) - expected)))
                 amount, _ = fit_opening(geometry, closed, nearest, 1.25 * reported)
                 break
-        if abs(amount) > 0:
-            self.memory.move(part.id, part_motion(geometry, amount))
+        if abs(amount - moved) > 0:
+            self.memory.move(part.id, part_motion(geometry, amount) @ back)
         self.memory.integrate(observation)
         self.views.append(observation)
         return amount
 
     def close_part(self, part: Instance) -> SkillResult:
-        """Close a door or drawer this robot opened, from where it stood to open it."""
+        """Close a door or drawer this robot opened, from where it stood to open it; once more, from
+        a fresh look at how far it stands open, when that fails with the part still open."""
+        result = self._close_once(part)
+        opened = self._remembered(self.opened, part)
+        if result.ok or opened is None or opened.amount <= 0:
+            return result
+        handles = [c for c in part.children if self.memory.get(c).label == "handle"]
+        if handles:
+            seen = self._seen_opening(opened.geometry, part, handles[0], opened.amount, moved=opened.amount)
+            self.opened[part.id] = _Opened(opened.geometry, seen, opened.stand, opened.look_point)
+        return self._close_once(part)
+
+    def _close_once(self, part: Instance) -> SkillResult:
         opened = self._remembered(self.opened, part)
         if opened is None:
             return SkillResult(False, f"{part.label} {part.id} was not opened by this robot")
-        self._drive(opened.stand)
+        if opened.amount <= 0:
+            del self.opened[part.id]
+            return SkillResult(True)
+        if not opened.held:
+            self._drive(opened.stand)
         result = self._skill(f"close_{opened.geometry.kind}", skill_base.SkillTarget(
             geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(opened.geometry.handle_point),
-            label=f"{part.label} {part.id}"))
+            label=f"{part.label} {part.id}"), held=opened.held)
         left = opened.amount if result.achieved is None else result.achieved
         motion = part_motion(opened.geometry, left) @ np.linalg.inv(part_motion(opened.geometry, opened.amount))
         self.memory.move(part.id, motion)
         if not result.ok:
+            if result.held is not None:  # refused at planning with the hand still on the handle
+                self.link.call("gripper", {"action": "open"})
             self.opened[part.id] = _Opened(opened.geometry, left, opened.stand, opened.look_point)
             return SkillResult(False, result.reason)
         del self.opened[part.id]
         return SkillResult(True)
+
+    def opening(self, part: Instance) -> float:
+        """How far this robot last saw ``part`` stand open (m or rad; 0 when it is not open by its doing)."""
+        opened = self._remembered(self.opened, part)
+        return 0.0 if opened is None else opened.amount
+
+    def stow(self) -> None:
+        """Fold the arm into the base, as it must be for the base to drive on freely."""
+        result = self._skill(Stow.skill_name, skill_base.SkillTarget())
+        if not result.ok:
+            raise SkillPlanError(result.reason)
 
     def _handle(self, call: SkillCall | None, part: Instance) -> int:
         named = None if call is None else call.params.get("handle")
@@ -308,12 +421,15 @@ class Robot:
             self._drive(self.home)
 
     # ---- the body -------------------------------------------------------------------------------
-    def _skill(self, name: str, target: skill_base.SkillTarget) -> skill_base.SkillResult:
+    def _skill(self, name: str, target: skill_base.SkillTarget, **options: Any) -> skill_base.SkillResult:
+        """Run the skill ``name`` (made with ``options``, e.g. ``hold``) on ``target``; on a failure
+        after the arm moved, fold it away."""
         skill = PRIMITIVES.get(name) or (Stow if name == Stow.skill_name else None)
         if skill is None:
             raise SkillPlanError(f"no skill named {name!r}")
         began = time.perf_counter()
-        result = skill_base.run_skill(skill, self.link, target, timeout_s=self.config.skill_timeout_s)
+        made = skill(self.link, **options) if any(options.values()) else skill
+        result = skill_base.run_skill(made, self.link, target, timeout_s=self.config.skill_timeout_s)
         self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
                                  "execution_s": round(result.execution_s, 3),
                                  "wall_s": round(time.perf_counter() - began, 3)})
@@ -328,14 +444,23 @@ class Robot:
 
     def _frame(self, camera: str) -> Observation:
         observation = Observation.from_message(self.link.call("observe", {"camera": camera}))
+        self.pose = tuple(float(v) for v in observation.base_pose)  # type: ignore[assignment]
         if camera == "head":
             self._eye = observation.camera_to_world[:3, 3].copy()
             if self.home is None:
-                self.home = tuple(float(v) for v in observation.base_pose)  # type: ignore[assignment]
+                self.home = self.pose
         return observation
 
-    def _drive(self, pose: tuple[float, float, float]) -> None:
-        reply: dict[str, Any] = self.link.call("move_base", {"path": [[pose[0], pose[1]]], "yaw": pose[2]}).meta
+    def _drive(self, pose: tuple[float, float, float], routes: Routes | None = None) -> None:
+        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight."""
+        path = [[pose[0], pose[1]]]
+        here = self.pose
+        if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
+                and routes.reaches(np.array(pose[:2])):
+            path = np.round(routes.to(np.array(pose[:2]))[1:], 3).tolist()
+        reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": pose[2]}).meta
+        if isinstance(reply.get("base_pose"), list):
+            self.pose = tuple(float(v) for v in reply["base_pose"])  # type: ignore[assignment]
         if not reply.get("reached"):
             raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
                                  f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")

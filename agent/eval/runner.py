@@ -184,5 +184,6 @@ def _run_job(job: Job, base_config: Config) -> dict[str, Any]:
         "answer": result.get("answer"),
         "steps": result.get("steps", 0),
         "step_scores": result.get("step_scores", []),
+        "acts": result.get("acts", []),
         "seconds": round(time.monotonic() - started, 2),
     }

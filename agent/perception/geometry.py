@@ -68,7 +68,9 @@ class PartGeometry:
     robot: the direction a drawer slides out and a door's free edge first moves. For doors,
     ``hinge_point`` is the point of the hinge line level with the handle, on the front's outer
     face, and ``hinge_axis`` the line's direction, signed so that opening is a positive rotation
-    about it; both are None for drawers.
+    about it; both are None for drawers. ``width``: for doors, how far the front reaches from the
+    hinge line (to its free edge, a little beyond the handle): the radius of what the door sweeps
+    as it swings, which whoever opens it must stand clear of; None when unknown.
     """
 
     kind: str
@@ -77,6 +79,7 @@ class PartGeometry:
     normal: np.ndarray
     hinge_point: np.ndarray | None = None
     hinge_axis: np.ndarray | None = None
+    width: float | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -95,6 +98,12 @@ class PartGeometry:
         if self.hinge_point is None or self.hinge_axis is None:
             return 0.0
         return _distance_to_line(self.handle_point, self.hinge_point, self.hinge_axis)
+
+    @property
+    def swing_radius(self) -> float:
+        """How far from the hinge line the door's front reaches as it swings: its `width` when seen,
+        else the handle's radius (0 for drawers)."""
+        return max(self.radius, self.width or 0.0)
 
 
 # --- directions --------------------------------------------------------------------------------
@@ -195,7 +204,8 @@ def part_geometry(
     if kind == "drawer":
         return PartGeometry("drawer", handle_point, axis, normal)
     hinge_point = hinge_line_point(front, handle_point, axis, normal)
-    return PartGeometry("door", handle_point, axis, normal, hinge_point, hinge_axis(handle_point, hinge_point, normal))
+    return PartGeometry("door", handle_point, axis, normal, hinge_point, hinge_axis(handle_point, hinge_point, normal),
+                        door_width(front, handle_point, hinge_point, axis, normal))
 
 
 def hinge_line_point(front_points: np.ndarray, handle_point: np.ndarray, handle_axis: np.ndarray,
@@ -214,6 +224,17 @@ def hinge_line_point(front_points: np.ndarray, handle_point: np.ndarray, handle_
     edge = lo if -lo > hi else hi
     face = float(np.median((front - handle_point) @ normal))
     return handle_point + edge * across + face * normal
+
+
+def door_width(front_points: np.ndarray, handle_point: np.ndarray, hinge_point: np.ndarray,
+               handle_axis: np.ndarray, normal: np.ndarray) -> float:
+    """How far a door's front reaches from its hinge line, across the handle: the 99th percentile of
+    its points' offsets that way (stray points aside), never less than the handle's own offset."""
+    front = _points(front_points, "front_points", minimum=3)
+    across = _unit(np.cross(normal, handle_axis), "handle_axis x normal")
+    toward_handle = 1.0 if (np.asarray(handle_point, float) - hinge_point) @ across >= 0 else -1.0
+    offsets = toward_handle * ((front - hinge_point) @ across)
+    return float(max(np.percentile(offsets, 99.0), toward_handle * (handle_point - hinge_point) @ across))
 
 
 def hinge_axis(handle_point: np.ndarray, hinge_point: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -293,7 +314,7 @@ def moved_geometry(geometry: PartGeometry, amount: float) -> PartGeometry:
     rotation = move[:3, :3]
     return PartGeometry(geometry.kind, move[:3, :3] @ geometry.handle_point + move[:3, 3],
                         rotation @ geometry.handle_axis, rotation @ geometry.normal,
-                        geometry.hinge_point, geometry.hinge_axis)
+                        geometry.hinge_point, geometry.hinge_axis, geometry.width)
 
 
 def fit_opening(geometry: PartGeometry, closed_points: np.ndarray, seen_points: np.ndarray, most: float,

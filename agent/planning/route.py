@@ -1,0 +1,68 @@
+"""Paths for the base over the robot's own map, for moves that are not exploration steps.
+
+The world drives the base along a polyline and stops at the first contact, so a straight line to a
+stand beside furniture may cut through the furniture on the way. `Routes` answers, from where the
+robot stands, which places it can reach and by which path, over the same distance field that
+exploration plans on (free cells clear of obstacles by the robot's radius, paths kept off them:
+`agent.planning.explore.reachable_frontiers`), and which places the map at least does not know to
+be blocked (their floor perhaps never seen). Built from the map while the map holds still, it may
+then be used from another thread while the tree ticks on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from agent.mapping.occupancy import ExplorationMap
+from agent.planning.explore import ExploreConfig, reachable_frontiers
+from agent.planning.paths import DistanceField, simplify_path
+
+#: Room kept, beyond the robot's radius, between a place to stand and the nearest obstacle on the
+#: map: clearances are measured between 10 cm cells, so a thing may stand nearer than they say.
+STAND_MARGIN_M = 0.1
+
+
+@dataclass(frozen=True)
+class Routes:
+    """Every path from one start (world x, y): whether it `reaches` a place, the waypoints `to` it.
+    ``clearance``: metres from each cell to the nearest obstacle on the map."""
+
+    field: DistanceField
+    start_xy: np.ndarray
+    clearance: np.ndarray
+    robot_radius: float
+
+    def reaches(self, xy: np.ndarray) -> bool:
+        """Whether the base can drive to ``xy`` over the map and stand there clear of obstacles."""
+        cell = self._cell(xy)
+        return cell is not None and bool(np.isfinite(self.field.metres[cell])) and self._clear(cell)
+
+    def unblocked(self, xy: np.ndarray) -> bool:
+        """Whether the map knows of no obstacle in the way of the base standing at ``xy``."""
+        cell = self._cell(xy)
+        return cell is not None and self._clear(cell)
+
+    def to(self, xy: np.ndarray) -> np.ndarray:
+        """Waypoints (K, 2) from the start to exactly ``xy``; raises ValueError if it is out of reach."""
+        goal = np.asarray(xy, dtype=float)[:2]
+        if not self.reaches(goal):
+            raise ValueError(f"({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached on the map")
+        cells = self.field.path_to(tuple(int(v) for v in self.field.spec.to_cell(goal)))
+        inner = self.field.spec.to_world(cells[1:-1]) if len(cells) > 2 else np.zeros((0, 2))
+        return simplify_path(np.vstack([self.start_xy, inner, goal]))
+
+    def _cell(self, xy: np.ndarray) -> tuple[int, int] | None:
+        cell = self.field.spec.to_cell(np.asarray(xy, dtype=float)[:2])
+        return (int(cell[0]), int(cell[1])) if self.field.spec.inside(cell) else None
+
+    def _clear(self, cell: tuple[int, int]) -> bool:
+        return bool(self.clearance[cell] >= self.robot_radius + STAND_MARGIN_M)
+
+
+def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: ExploreConfig = ExploreConfig()) -> Routes:
+    """The routes from ``start_xy`` over ``world_map`` as it is now."""
+    start = np.asarray(start_xy, dtype=float)[:2]
+    field = reachable_frontiers(world_map, (float(start[0]), float(start[1])), config).field
+    return Routes(field, start, world_map.clearance(), world_map.config.robot_radius)
