@@ -136,6 +136,11 @@ def _parser() -> argparse.ArgumentParser:
                           help="results, table.md and coverage.png go here; reruns resume")
     coverage.set_defaults(handler=_eval_coverage)
 
+    acts = evaluations.add_parser("acts", help="what the act branch did over an evaluation's episodes")
+    acts.add_argument("results", type=Path, help="a results file (JSON lines), e.g. explore-results.jsonl")
+    acts.add_argument("--method", help="only the episodes of this variant (e.g. semantic)")
+    acts.set_defaults(handler=_eval_acts)
+
     calibrate = commands.add_parser("calibrate", help="calibrate conformal prediction on a suite")
     _suite_run_options(calibrate, "runs/calibration.json",
                        "the calibration file; episodes go beside it as .episodes.jsonl; reruns resume")
@@ -401,6 +406,17 @@ def _eval_interactive(args: argparse.Namespace) -> int:
         cells = "".join(f"{row[c][0]:>15.2f} ± {row[c][1]:<4.2f}" for c in COLUMNS)
         print(f"{task:<12}{cells}{PAPER_SUCCESS[task]:>15.0%}")
     print(f"results {report['results']}")
+    return 0
+
+
+def _eval_acts(args: argparse.Namespace) -> int:
+    from agent.eval.acts import default_stopping, format_summary, summarise
+    from agent.eval.runner import read_results
+
+    if not args.results.is_file():
+        print(f"homebot eval acts: {args.results}: no such file", file=sys.stderr)
+        return 2
+    print(format_summary(summarise(read_results(args.results), args.method, default_stopping())))
     return 0
 
 

@@ -356,9 +356,7 @@ class ArmPlanner:
         retreat = self._off(builder, swept[-1], poses[0], f"retreat from {what}")
         builder.move(f"push the {geometry.kind} closed", swept, careful=True, tcp_target=poses[0],
                      part_motion=PartMotion(geometry, poses[0][:3, 3], float(amount), 0.0))
-        builder.gripper("open", f"let go of the {what}")
-        builder.move(f"back off the {what}", retreat, careful=True,
-                     tcp_target=builder.base @ self.kin.forward(retreat[-1]))
+        builder.let_go(what, retreat)
         info = {"grasp_pose": grasp, "release_pose": poses[0], "kind": geometry.kind, "start": float(amount),
                 "end": 0.0, "held": True}
         return builder.finish(skill or f"close_{geometry.kind}", info)
@@ -529,9 +527,7 @@ class ArmPlanner:
                 builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
                              swept if opening else swept[::-1], careful=True, tcp_target=release, part_motion=motion)
                 if not hold:
-                    builder.gripper("open", f"let go of the {what}")
-                    builder.move(f"back off the {what}", retreat, careful=True,
-                                 tcp_target=builder.base @ self.kin.forward(retreat[-1]))
+                    builder.let_go(what, retreat)
                 info = {"grasp_pose": grasp, "release_pose": release, "flip": flip, "tilt": tilt,
                         "kind": geometry.kind, "start": start, "end": end, "held": hold}
                 return builder.finish(skill, info)
@@ -791,6 +787,12 @@ class _Builder:
 
     def gripper(self, action: str, name: str, expect_held: str | None = None) -> None:
         self.steps.append(Step("gripper", name, action=action, expect_held=expect_held))
+
+    def let_go(self, what: str, retreat: np.ndarray) -> None:
+        """Open the hand on ``what`` and back off along ``retreat``, as every part skill ends."""
+        self.gripper("open", f"let go of the {what}")
+        self.move(f"back off the {what}", retreat, careful=True,
+                  tcp_target=self.base @ self.planner.kin.forward(retreat[-1]))
 
     def finish(self, skill: str, info: dict[str, Any]) -> SkillPlan:
         planning_ms = 1e3 * (time.perf_counter() - self.began)

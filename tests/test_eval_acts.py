@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 from agent.eqa.stopping import BudgetRule
-from agent.eval.acts import cause, format_summary, main, summarise
+from agent.cli import main
+from agent.eval.acts import cause, format_summary, summarise
 
 
 def _act(looked: bool, closed: bool | None, stage: str | None = None, reason: str = "") -> dict:
@@ -64,7 +65,7 @@ def test_what_a_stopping_rule_would_have_answered_is_replayed_over_the_recorded_
 def test_the_summary_is_printed_from_a_results_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "explore-results.jsonl"
     path.write_text("".join(json.dumps(r) + "\n" for r in RESULTS))
-    assert main([str(path), "--method", "semantic"]) == 0
+    assert main(["eval", "acts", str(path), "--method", "semantic"]) == 0
     out = capsys.readouterr().out
     assert "episodes answered right        2/3 (67 %) at the full budget, 1/3 (33 %) stopped by the stopping rule" in out
-    assert main([str(tmp_path / "missing.jsonl")]) == 2
+    assert main(["eval", "acts", str(tmp_path / "missing.jsonl")]) == 2

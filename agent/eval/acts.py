@@ -4,7 +4,7 @@ shut it again, how often that answered the question, and why the rest failed.
 Every episode's result keeps its ``acts`` (one record per attempt, `behaviours.look_inside`), and
 `homebot eval explore` copies them into its results file. Run over that file::
 
-    .venv/bin/python -m agent.eval.acts runs/eval-explore/explore-results.jsonl [--method semantic]
+    .venv/bin/homebot eval acts runs/eval-explore/explore-results.jsonl [--method semantic]
 
 Failure reasons are grouped by the stage they happened at (open, close, stow) and a cause read off
 the reason's wording (`CAUSES`); the reasons themselves are in the file.
@@ -18,20 +18,16 @@ replayed over the recorded steps (`agent.eqa.stopping.replay`) and counted too.
 
 from __future__ import annotations
 
-import argparse
 import re
-import sys
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from agent.config import load_config
 from agent.eqa.answers import steps_from_records
 from agent.eqa.calibration import calibration_for
 from agent.eqa.stopping import StoppingRule, make_rule, replay
-from agent.eval.runner import read_results
 from worlds.vocabulary import LETTERS
 
 #: (pattern in a failure's reason, the cause it names), first match wins.
@@ -137,19 +133,3 @@ def format_summary(summary: ActSummary) -> str:
     ]
     lines += [f"  {count:>3}  {stage:<6} {name}" for (stage, name), count in summary.failures.most_common()]
     return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m agent.eval.acts", description=__doc__.splitlines()[0])
-    parser.add_argument("results", type=Path, help="a results file (JSON lines), e.g. explore-results.jsonl")
-    parser.add_argument("--method", help="only the episodes of this variant (e.g. semantic)")
-    args = parser.parse_args(argv)
-    if not args.results.exists():
-        print(f"{args.results}: no such file", file=sys.stderr)
-        return 2
-    print(format_summary(summarise(read_results(args.results), args.method, default_stopping())))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -49,18 +49,23 @@ class MovePlan:
     goal_distance_m: float
 
 
+def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance: np.ndarray,
+                config: ExploreConfig = ExploreConfig()) -> tuple[DistanceField, np.ndarray]:
+    """Path costs from the robot over the cells it may drive (kept off walls where there is room),
+    and those cells; ``clearance`` is ``world_map.clearance()``, which callers often need too."""
+    start = tuple(int(v) for v in world_map.spec.to_cell(np.asarray(robot_xy)))
+    cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
+    traversable = world_map.traversable(robot_xy, clearance)
+    return distance_field(world_map.spec, traversable, start, cell_cost), traversable
+
+
 def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float],
                         config: ExploreConfig = ExploreConfig()) -> Candidates:
     """Frontier clusters in the free space connected to the robot, nearer ones dropped."""
-    spec = world_map.spec
-    start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
-    clearance = world_map.clearance()
-    cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
-    traversable = world_map.traversable(robot_xy, clearance)
-    field = distance_field(spec, traversable, start, cell_cost)
+    field, traversable = drive_field(world_map, robot_xy, world_map.clearance(), config)
     reachable = np.isfinite(field.metres)
     mask = frontier_cells(reachable, world_map.explored, world_map.occupied, config.min_unexplored_neighbours)
-    frontiers = cluster_frontiers(spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)
+    frontiers = cluster_frontiers(world_map.spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)
     distances = np.array([field.metres[f.centre] for f in frontiers])
     keep = distances >= config.min_frontier_distance_m
     return Candidates([f for f, k in zip(frontiers, keep) if k], distances[keep], field, traversable)

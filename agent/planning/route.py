@@ -4,7 +4,7 @@ The world drives the base along a polyline and stops at the first contact, so a 
 stand beside furniture may cut through the furniture on the way. `Routes` answers, from where the
 robot stands, which places it can reach and by which path, over the same distance field that
 exploration plans on (free cells clear of obstacles by the robot's radius, paths kept off them:
-`agent.planning.explore.reachable_frontiers`), and which places the map at least does not know to
+`agent.planning.explore.drive_field`), and which places the map at least does not know to
 be blocked (their floor perhaps never seen). Built from the map while the map holds still, it may
 then be used from another thread while the tree ticks on.
 """
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import ExploreConfig, reachable_frontiers
+from agent.planning.explore import ExploreConfig, drive_field
 from agent.planning.paths import DistanceField, simplify_path
 
 #: Room kept, beyond the robot's radius, between a place to stand and the nearest obstacle on the
@@ -64,5 +64,6 @@ class Routes:
 def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: ExploreConfig = ExploreConfig()) -> Routes:
     """The routes from ``start_xy`` over ``world_map`` as it is now."""
     start = np.asarray(start_xy, dtype=float)[:2]
-    field = reachable_frontiers(world_map, (float(start[0]), float(start[1])), config).field
-    return Routes(field, start, world_map.clearance(), world_map.config.robot_radius)
+    clearance = world_map.clearance()
+    field, _ = drive_field(world_map, (float(start[0]), float(start[1])), clearance, config)
+    return Routes(field, start, clearance, world_map.config.robot_radius)
