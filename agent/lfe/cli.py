@@ -64,12 +64,18 @@ def _data(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise ValueError(f"--workers: {args.workers} must be at least 1")
     started = time.monotonic()
+    explored = 0
 
-    def progress(done: int, total: int, samples: int) -> None:
-        rate = (time.monotonic() - started) / max(done, 1)
+    def progress(done: int, total: int, samples: int | None) -> None:
+        nonlocal explored
         end = "\n" if done == total else ""
-        sys.stderr.write(f"\r  {done}/{total} homes, last one {samples} maps, ~{rate * (total - done) / 60:.0f} min "
-                         f"left   {end}")
+        if samples is None:
+            sys.stderr.write(f"\r  {done}/{total} homes (already there)   {end}")
+        else:
+            explored += 1
+            rate = (time.monotonic() - started) / explored
+            sys.stderr.write(f"\r  {done}/{total} homes, last one {samples} maps, ~{rate * (total - done) / 60:.0f} min "
+                             f"left   {end}")
         sys.stderr.flush()
 
     seeds = range(args.first_seed, args.first_seed + args.homes)

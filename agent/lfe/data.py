@@ -99,11 +99,12 @@ def home_samples(seed: int, config: DataConfig = DataConfig()) -> dict[str, np.n
 
 
 def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = DataConfig(), workers: int = 1,
-                     progress: Callable[[int, int, int], None] | None = None) -> DatasetSummary:
+                     progress: Callable[[int, int, int | None], None] | None = None) -> DatasetSummary:
     """Write one shard per seed into ``out_dir``, skipping the seeds whose shard is there.
 
     ``progress(done, total, samples)`` is called once per home, skipped ones first, with the maps
-    this call recorded in it (0 for a skipped home). With ``workers`` > 1, homes are explored in
+    this call recorded in it (None for a skipped home, so that an estimate of the time left can
+    leave those out). With ``workers`` > 1, homes are explored in
     that many processes and each shard is written as its home finishes; if one home fails, the
     shards already written stay, so a rerun picks up where this one stopped.
     """
@@ -122,7 +123,7 @@ def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = D
     for _ in skipped:
         done += 1
         if progress is not None:
-            progress(done, len(unique), 0)
+            progress(done, len(unique), None)
     written, snapshots, pixels = [], 0, 0
     for (seed, _), arrays in as_finished(home_samples, [(seed, config) for seed in todo], workers):
         write_shard(shard_path(out_dir, seed), arrays)
