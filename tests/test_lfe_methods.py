@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from agent.eval.coverage import SIZES, evaluate_coverage, format_table, jobs, plot_curves
+from agent.eval.coverage import SIZES, evaluate_coverage, format_table, jobs, model_digest, plot_curves
 from agent.lfe.bellman import choose_frontier, plan
 from agent.lfe.bench import branches
 from agent.lfe.coverage import CoverageConfig, TrueHome, fbe_near, run_coverage
@@ -134,6 +134,18 @@ def test_the_evaluation_appends_resumes_and_tabulates(tmp_path: Path) -> None:
     text = format_table(report["table"])
     assert "| fbe-near |" in text and "92.7 / 74.8 / 61.0 / 76.8" in text
     assert plot_curves(report["rows"], ["fbe-near"], tmp_path / "curves.png").stat().st_size > 0
+
+
+def test_learned_rows_of_another_network_are_run_again_not_mixed_in(tmp_path: Path) -> None:
+    planned = jobs(1, ["fbe-near", "greedy"], model="abc")
+    assert {(job.method, job.model) for job in planned} == {("fbe-near", None), ("greedy", "abc")}
+    stale = [{"size": size, "seed": job.seed, "method": "greedy", "budget": 5, "model": "0123456789ab",
+              "coverage": 1.0, "curve": [1.0]} for size, job in zip(SIZES, [j for j in planned if j.model])]
+    (tmp_path / "coverage-results.jsonl").write_text("".join(json.dumps(row) + "\n" for row in stale))
+    ran: list[dict] = []
+    report = evaluate_coverage(tmp_path, 1, ["greedy"], steps=5, progress=lambda done, total, row: ran.append(row))
+    assert len(ran) == len(SIZES)  # the stale rows were another network's
+    assert {row["model"] for row in report["rows"]} == {model_digest(None)}
 
 
 @pytest.mark.parametrize("arguments, message", [

@@ -4,11 +4,14 @@ Each method explores the same homes from the same start with a 360° sensor for 
 score is the share of the home's free floor it has observed (`agent.lfe.coverage`). Homes come in
 three sizes by floor area; their seeds are far from the training data's (which start at 0), so no
 home is evaluated that the network was trained on. One result row per (home, method) is appended
-as it finishes, and a rerun resumes where the last one stopped.
+as it finishes, and a rerun resumes where the last one stopped. Rows of the learned methods carry
+the digest of the network that made them, so a rerun with another model runs them again instead
+of mixing two networks in one table.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sys
 import time
@@ -43,12 +46,30 @@ class CoverageJob:
     seed: int
     method: str
     steps: int = 500  # the step budget
+    model: str | None = None  # digest of the network (`model_digest`); None for methods without one
+
+    @property
+    def key(self) -> tuple[str, int, str, int, str | None]:
+        """What makes two result rows the same episode."""
+        return self.size, self.seed, self.method, self.steps, self.model
 
 
-def jobs(homes_per_size: int, methods: Iterable[str], steps: int = 500) -> list[CoverageJob]:
-    """Every (home, method) pair, homes in size order, methods in the given order per home."""
+LEARNED = (Method.LFE, Method.GREEDY)
+"""The methods that read the network."""
+
+
+def model_digest(model: Path | None) -> str:
+    """The first 12 hex digits of the SHA-256 of the network file (the shipped one for None)."""
+    from agent.lfe.estimator import SHIPPED_MODEL
+
+    return hashlib.sha256((SHIPPED_MODEL if model is None else model).read_bytes()).hexdigest()[:12]
+
+
+def jobs(homes_per_size: int, methods: Iterable[str], steps: int = 500, model: str | None = None) -> list[CoverageJob]:
+    """Every (home, method) pair, homes in size order, methods in the given order per home; the
+    learned methods' jobs carry ``model``, the digest of the network they use."""
     methods = list(methods)
-    return [CoverageJob(size, SEED_BASE + 1000 * band + index, method, steps)
+    return [CoverageJob(size, SEED_BASE + 1000 * band + index, method, steps, model if method in LEARNED else None)
             for band, size in enumerate(SIZES) for index in range(homes_per_size) for method in methods]
 
 
@@ -75,13 +96,13 @@ def run_job(job: CoverageJob, model: Path | None) -> dict[str, Any]:
     config = CoverageConfig(budget_steps=job.steps)
     home = TrueHome.from_home(generate_home(job.seed, area_m2=home_area(job.size, job.seed)), config, job.seed)
     estimator = None
-    if job.method in (Method.LFE, Method.GREEDY):
+    if job.method in LEARNED:
         key = str(model)
         if key not in _ESTIMATORS:
             _ESTIMATORS[key] = LearnedEstimator.load(model)
         estimator = _ESTIMATORS[key]
     result = run_coverage(home, make_chooser(job.method, home, estimator, config), config)
-    return {"size": job.size, "seed": job.seed, "method": job.method, "budget": job.steps,
+    return {"size": job.size, "seed": job.seed, "method": job.method, "budget": job.steps, "model": job.model,
             "area_m2": round(home.area_m2, 2),
             "coverage": round(100.0 * float(result.coverage[-1]), 3),
             "curve": [round(100.0 * float(v), 3) for v in result.coverage[::CURVE_EVERY]],
@@ -111,21 +132,21 @@ def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str]
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / RESULTS
     done = {_key(r) for r in read_results(path)}
-    wanted = jobs(homes_per_size, methods, steps)
-    todo = [job for job in wanted if (job.size, job.seed, job.method, job.steps) not in done]
+    wanted = jobs(homes_per_size, methods, steps, model_digest(model))
+    todo = [job for job in wanted if job.key not in done]
     with open(path, "a", encoding="utf-8") as out:
         for number, (_, row) in enumerate(as_finished(run_job, [(job, model) for job in todo], workers), start=1):
             out.write(json.dumps(row) + "\n")
             out.flush()
             if progress:
                 progress(number, len(todo), row)
-    keys = {(job.size, job.seed, job.method, job.steps) for job in wanted}
+    keys = {job.key for job in wanted}
     rows = [r for r in read_results(path) if _key(r) in keys]
     return {"table": coverage_table(rows, methods), "rows": rows, "results": str(path), "n": len(rows)}
 
 
-def _key(row: dict[str, Any]) -> tuple[str, int, str, int]:
-    return row["size"], row["seed"], row["method"], row["budget"]
+def _key(row: dict[str, Any]) -> tuple[str, int, str, int, str | None]:
+    return row["size"], row["seed"], row["method"], row["budget"], row.get("model")
 
 
 def coverage_table(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, dict[str, tuple[float, float]]]:
