@@ -13,8 +13,11 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
    ``gripper``), RUNNING while each is in flight, and check every reply:
 
    - a move that stopped on a contact, or fell short of its target by more than `BLOCKED_RAD` (a
-     push too gentle for the world to report as a contact still holds the arm back), fails;
-   - closing the gripper must catch what the step expects (a handle, an object);
+     push too gentle for the world to report as a contact still holds the arm back), fails; but a
+     touch grasp's approach (`Step.touch`) that stops on touching only what it reaches for, or is
+     held back touching nothing else, has arrived (what follows is re-timed from where it stopped);
+   - closing the gripper must catch what the step expects (a handle, an object), or, closing the
+     fingers before a touch grasp's approach, nothing;
    - a move that carries a part (`skills.plan.PartMotion`) measures the part's opening from where
      the TCP, which holds the handle, ended; the part must have gone at least `MIN_PART_SHARE` of
      the way, else "the drawer did not open"; a part held back by its joint's end (a drawer pulled
@@ -23,8 +26,9 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
      where it really is (else it would spring to the target once free), and any move whose
      samples no longer start where the arm is gets re-timed from there.
 
-A failure while the hand holds something first lets go (RUNNING until the gripper has opened), so
-the base is not left tied to furniture, then fails. `run_skill` ticks a one-behaviour tree to the
+A failure while the hand holds something, or with its fingers closed, first opens the gripper
+(RUNNING until it has), so the base is not left tied to furniture and the next grasp starts with
+the fingers open, then fails. `run_skill` ticks a one-behaviour tree to the
 end, for scripts and tests.
 """
 
@@ -61,6 +65,13 @@ RETIME_RAD = 0.005
 MIN_PART_SHARE = 0.6
 #: Seconds allowed for a command beyond its motion's duration (the world runs faster than real time).
 COMMAND_SLACK_S = 30.0
+#: Fingers closer than this (m between them) are closed: a failure opens them again.
+FINGERS_CLOSED_M = 0.01
+#: What a grasp holds when it holds what the step expects, and what it says otherwise.
+_EXPECTED = {
+    "handle": (lambda label: label.get("category") == "handle", "not a handle"),
+    "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -288,18 +299,22 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         """Why the reply to ``step`` means the skill failed ("" when it is fine)."""
         held = state["held"]
         if step.kind == "gripper":
+            if step.action == "close" and step.expect_held is None:
+                return "" if held is None else f"the fingers caught {_name(held)} closing before the approach"
             if step.action == "close":
                 if held is None:
                     return f"the gripper closed on nothing ({state['gripper_width'] * 1000:.0f} mm between the fingers)"
-                if step.expect_held == "handle" and held.get("category") != "handle":
-                    return f"the gripper holds {_name(held)}, not a handle"
-                if step.expect_held == "object" and held.get("link") is not None:
-                    return f"the gripper holds {_name(held)}, part of a piece of furniture, not an object"
+                expected, otherwise = _EXPECTED[step.expect_held]
+                if not expected(held):
+                    return f"the gripper holds {_name(held)}, {otherwise}"
             elif held is not None:
                 return f"the gripper still holds {_name(held)} after opening"
             return ""
         contacts = state["contacts"]
         self._contacts += contacts
+        stopped = state["stopped_on_contact"] or state["final_error"] > BLOCKED_RAD
+        if step.touch and stopped and all(_EXPECTED[step.touch][0](c) for c in contacts):
+            return ""  # a touch grasp's approach found what it reaches for (or a touch too light to report)
         if state["stopped_on_contact"]:
             touched = ", ".join(f"{_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
             return f"stopped on contact with {touched}"
@@ -359,9 +374,13 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _fail(self, reason: str) -> Status:
         reason = f"{self.skill_name or self.name}: {reason}"
-        if self._phase == "run" and self._last is not None and self._last.get("held") is not None:
-            # do not stay tied to furniture: let go first, then fail (see `_released`)
-            self._phase, self._failure = "release", f"{reason} (let go of {_name(self._last['held'])})"
+        last = self._last
+        if self._phase == "run" and last is not None and (last.get("held") is not None
+                                                          or last["gripper_width"] < FINGERS_CLOSED_M):
+            # do not stay tied to furniture, nor start the next grasp with closed fingers: open
+            # first, then fail (see `_released`)
+            held = last.get("held")
+            self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {_name(held)})"
             try:
                 self._pending = self.link.request("gripper", {"action": "open"}, self.timeout_s)
             except QueryFailed as error:
@@ -387,9 +406,10 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         return Status.FAILURE
 
     def summary(self, result: SkillResult) -> str:
-        """One line for the feedback message of a skill that succeeded."""
-        return (f"{self.skill_name}: done in {result.execution_s:.1f} s "
-                f"({result.info.get('motion_s', 0.0):.1f} s of motion, planned in {result.planning_ms:.0f} ms)")
+        """One line for the feedback message of a skill that succeeded (with the grasp it took, if any)."""
+        grasp = f", {result.info['grasp']} grasp" if "grasp" in result.info else ""
+        return (f"{self.skill_name}: done in {result.execution_s:.1f} s ({result.info.get('motion_s', 0.0):.1f} s "
+                f"of motion, planned in {result.planning_ms:.0f} ms{grasp})")
 
 
 def _arm_state(meta: dict[str, Any]) -> dict[str, Any]:

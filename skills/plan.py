@@ -23,17 +23,20 @@ The primitives (RoboEXP's seven, §2 of the spec):
   withdraw straight towards the base (`WITHDRAW_AHEAD_M`; the staging pose is the same withdrawal
   ahead of the pre-grasp, so closing starts where opening ended). The chain is solved from the
   closed grasp outwards whichever way the part moves, so a close takes the posture its open took.
-  Grasp variants (the hand turned half a turn about its axis, tilted about the bar: `FLIPS`,
-  `TILTS`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
+  Grasp variants (the hand turned half a turn about its axis, tilted about the bar:
+  `skills.grasps.level_grasps`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
   turn until one chain is reachable throughout. With ``surface_z`` (a table's top) variants whose
-  hand would come down onto it are refused (`HAND_BOXES`): a bar less than ~9 cm above the table
-  cannot be grasped by a Panda hand 21 cm tall across its fingers. An opening may end holding the
-  handle (``hold``); `ArmPlanner.plan_close_held` then pushes the part shut from that grasp;
+  hand would come down onto it are refused (`skills.grasps.HAND_BOXES`): a bar less than ~9 cm above the table
+  cannot be grasped by a Panda hand 21 cm tall across its fingers. A drawer's bar is then
+  grasped from above, the fingers closed and their tips brought down onto it until they touch
+  (`skills.grasps.handle_top_grasps`). An opening may end holding the handle (``hold``);
+  `ArmPlanner.plan_close_held` then pushes the part shut from that grasp;
 - pick an object away / back (`ArmPlanner.plan_pick`): top-down. Above the object, down onto its
   top (the fingers closing across the line of sight from the robot where the object fits that way,
-  since perception places things worst along it), close, lift, carry at height, lower until the
-  object stands a little above where it should (the world puts a released object down onto
-  whatever is under it), open, back up, ready (`READY`);
+  since perception places things worst along it; an object wider than the opening is held by the
+  closed fingertips brought down onto its top until they touch, `skills.grasps.object_grasps`),
+  close, lift, carry at height, lower until the object stands a little above where it should (the
+  world puts a released object down onto whatever is under it), open, back up, ready (`READY`);
 - move the wrist camera (`ArmPlanner.plan_look`): one free move that puts the wrist camera's
   optical frame at a standoff from a point, its optical axis on the point (IK "axis" mode: the
   rotation about the axis is free), trying steeper and shallower views and shorter and longer
@@ -54,12 +57,25 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from agent.perception.geometry import PartGeometry, grasp_pose, moved_geometry
+from skills.grasps import (
+    LIFT_OFF_M,
+    TOUCH_SEARCH_M,
+    UP,
+    HandleGrasp,
+    ObjectGrasp,
+    front_clearance,
+    hand_bottom,
+    handle_top_grasps,
+    level_grasps,
+    local_pose,
+    object_grasps,
+)
 from skills.kinematics import ArmKinematics, IKMode, line_poses
 from skills.trajectory import JointLimits, plan_trajectory
 
@@ -71,23 +87,12 @@ READY = (0.1, 0.0, -1.3, 0.0, -2.5, 0.0, 2.1, 0.785)
 _AHEAD = ((0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, -0.785), (0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, 0.785))
 #: How far out along the gripper's axis a grasp is approached from and retreated to.
 APPROACH_M = 0.10
-#: How far past the perceived handle point (along the approach) the TCP closes: the centre of a
-#: bar's voxels lies within a few millimetres of its axis when its face and top are both seen.
-HANDLE_DEPTH_M = 0.0
 #: A part skill ends with the hand drawn straight back towards the base until it is this far ahead
 #: of the base's axis (at the height and on the side it let go), clear of what it opened.
 WITHDRAW_AHEAD_M = 0.35
 #: Cartesian step of approaches, pulls and carries (m), and of door arcs (rad).
 LINE_STEP_M = 0.01
 ARC_STEP_RAD = math.radians(1.5)
-#: Grasp variants tried in order: half turns about the gripper's axis, tilts about the handle's bar
-#: (negative: the gripper points down onto a level bar, the hand above it; see `_tilted`).
-FLIPS = (0.0, math.pi)
-TILTS = (0.0, -0.3, 0.3, -0.15, 0.15)
-#: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision
-#: meshes): what must stay above a surface (``surface_z``) while the hand works at a handle.
-HAND_BOXES = (((-0.034, -0.106, -0.131), (0.034, 0.106, -0.035)),
-              ((-0.012, -0.068, -0.045), (0.012, 0.068, 0.011)))
 #: How far the hand reaches from the TCP across its axis (half its span along the fingers).
 HAND_RADIUS_M = 0.11
 #: The robot's body around the base's axis (its radius and a margin): no surface reaches in there.
@@ -99,7 +104,7 @@ PART_RESTARTS = 4
 #: A part's path solved anew is the one the arm holding it is on when it passes within this (rad or
 #: m, any joint) of where the arm is.
 HELD_MATCH_RAD = 0.05
-#: The gripper's opening between the fingers (m); objects wider than this less a margin are refused.
+#: The gripper's opening between the fingers (m); objects wider than this less a margin are held by their top.
 GRIPPER_OPENING_M = 0.08
 #: Speeds as fractions of the joints' velocity limits: free moves, and moves near or holding things.
 FREE_SPEED, CAREFUL_SPEED = 0.5, 0.25
@@ -145,8 +150,10 @@ class PartMotion:
 class Step:
     """One command of a plan. ``kind`` "move": ``samples`` (N, dof) every ``dt`` s through the joint
     ``waypoints`` at ``speed`` (a fraction of the velocity limits), ending with the TCP at
-    ``tcp_target`` (world); ``part_motion`` when it moves a held part. ``kind`` "gripper":
-    ``action`` "open" or "close" and, closing, ``expect_held`` ("handle" or "object")."""
+    ``tcp_target`` (world); ``part_motion`` when it moves a held part; ``touch`` ("handle" or
+    "object") when it is a touch grasp's approach, which arrives when it stops on touching that.
+    ``kind`` "gripper": ``action`` "open" or "close" and, closing, ``expect_held`` ("handle" or
+    "object"; None: the fingers close on nothing, to touch with their tips)."""
 
     kind: str
     name: str
@@ -159,6 +166,7 @@ class Step:
     part_motion: PartMotion | None = None
     action: str | None = None
     expect_held: str | None = None
+    touch: str | None = None
 
     @property
     def duration_s(self) -> float:
@@ -197,7 +205,8 @@ class SkillPlan:
         return sum(step.duration_s for step in self.steps)
 
     def describe(self) -> str:
-        lines = [f"{self.skill}: {len(self.steps)} steps, {self.duration_s:.1f} s of motion, planned in "
+        grasp = f" ({self.info['grasp']} grasp)" if "grasp" in self.info else ""
+        lines = [f"{self.skill}{grasp}: {len(self.steps)} steps, {self.duration_s:.1f} s of motion, planned in "
                  f"{self.planning_ms:.0f} ms ({self.ik_solves} IK solves {self.ik_ms:.0f} ms, "
                  f"trajectories {self.trajectory_ms:.0f} ms)"]
         lines += [f"  {step.describe()}" for step in self.steps]
@@ -209,25 +218,6 @@ def base_transform(base_pose: Sequence[float]) -> np.ndarray:
     x, y, yaw = (float(v) for v in base_pose)
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-
-
-def rotation_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def rotation_x(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _local(rotation: np.ndarray | None = None, z: float = 0.0) -> np.ndarray:
-    """A transform in the TCP's own frame: a rotation, then a shift along its (new) z."""
-    pose = np.eye(4)
-    if rotation is not None:
-        pose[:3, :3] = rotation
-    pose[:3, 3] = pose[:3, :3] @ [0.0, 0.0, z]
-    return pose
 
 
 def _field(entry: Any, name: str) -> Any:
@@ -312,8 +302,7 @@ class ArmPlanner:
         waypoints = self.kin.clip(waypoints)
         trajectory = plan_trajectory(waypoints, self.limits(step.speed), self.dt)
         samples = trajectory.positions[1:] if len(trajectory.positions) > 1 else trajectory.positions
-        return Step(step.kind, step.name, self.kin.clip(samples), self.dt, waypoints, step.speed,
-                    step.stop_on_contact, step.tcp_target, step.part_motion)
+        return replace(step, samples=self.kin.clip(samples), dt=self.dt, waypoints=waypoints)
 
     def hold(self, q: np.ndarray) -> Step:
         """A one-sample move that holds the arm where it is (after a motion that fell short)."""
@@ -391,41 +380,37 @@ class ArmPlanner:
                   grasp_depth_m: float | None = None) -> SkillPlan:
         """Pick the object whose top grasp point is ``object_point`` (world) and whose box is ``extent``
         (dx, dy, dz), and put it down so that that point ends ``clearance_m`` above ``place_point``.
+        The fingers close around it where it fits between them, else their tips come down on its
+        top (`skills.grasps.object_grasps`); ``info["grasp"]`` says which.
         ``surface_z``: the table's top, which free moves keep the hand above."""
         top = _vector(object_point, "object_point")
         place = _vector(place_point, "place_point")
         size = _vector(extent, "extent")
         if np.any(size <= 0):
             raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
-        width = float(min(size[0], size[1]))
-        if width > self.gripper_opening - 0.005:
-            raise SkillPlanError(f"pick: the object is {width:.3f} m across at its narrowest, too wide for the "
-                                 f"gripper's {self.gripper_opening:.3f} m opening")
         depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
         builder = _Builder(self, q, base_pose, surface_z)
         failures: list[str] = []
-        for y_axis in _closing_directions(size, top, base_pose, self.gripper_opening - 0.005):
-            z_axis = np.array([0.0, 0.0, -1.0])
-            rotation = np.column_stack([np.cross(y_axis, z_axis), y_axis, z_axis])
-            grasp = _pose(rotation, top - depth * np.array([0.0, 0.0, 1.0]))
-            release = _pose(rotation, place + np.array([0.0, 0.0, clearance_m - depth]))
-            up = np.array([0.0, 0.0, lift_m])
-            above_grasp, above_release = _shifted(grasp, up), _shifted(release, up)
+        for way in object_grasps(size, top, base_pose, self.gripper_opening - 0.005, depth):
+            grasp = _pose(way.rotation, top - way.depth * UP)
+            release = _pose(way.rotation, place + (clearance_m - way.depth) * UP)
+            above_grasp, above_release = _shifted(grasp, lift_m * UP), _shifted(release, lift_m * UP)
+            down = "down onto the object's top" if way.touch else "down onto the object"
             try:
                 chain = builder.try_chain([
                     ("above the object", "free", above_grasp),
-                    ("down onto the object", "line", grasp),
+                    (down, "line", grasp),
                     ("lift", "line", above_grasp),
                     ("carry", "line", above_release),
                     ("lower", "line", release),
                     ("back up", "line", above_release),
                 ])
+                descent = self._searched(builder, chain[1], grasp, down) if way.touch else chain[1]
             except SkillPlanError as error:
                 failures.append(str(error))
                 continue
             builder.free_move("to above the object", chain[0][-1])
-            builder.move("down onto the object", chain[1], careful=True, stop_on_contact=True, tcp_target=grasp)
-            builder.gripper("close", "grasp the object", expect_held="object")
+            self._grasp(builder, way, down, descent, grasp, "object")
             builder.move("lift", chain[2], careful=True, tcp_target=above_grasp)
             builder.move("carry", chain[3], careful=False, tcp_target=above_release)
             builder.move("lower", chain[4], careful=True, tcp_target=release)
@@ -433,7 +418,7 @@ class ArmPlanner:
             builder.move("back up", chain[5], careful=True, tcp_target=above_release)
             builder.free_move("to ready", self.ready, via_ready=False)
             info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
-                    "grasp_depth_m": depth}
+                    "grasp_depth_m": way.depth, "grasp": way.name}
             return builder.finish(skill, info)
         raise SkillPlanError(_best_failure(failures, "pick"))
 
@@ -489,10 +474,13 @@ class ArmPlanner:
         """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
         and (unless ``hold``) let go and back off.
 
-        Whichever way the part moves, the chain is solved from the closed grasp outwards (the grasp,
-        then the part's path to its open end, then the straight lines off either end of it) and
-        the pieces are put in the order the arm runs them; so closing a part takes the posture its
-        opening took, which is known to reach along the whole path.
+        The level grasps are tried first (`skills.grasps.level_grasps`); where none fits (a drawer's bar too low
+        over a table for the hand across it), a drawer's bar is grasped from above
+        (`skills.grasps.handle_top_grasps`). Whichever way the part moves, the chain is solved
+        from the closed grasp outwards (the grasp, then the part's path to its open end, then the
+        straight lines off either end of it) and the pieces are put in the order the arm runs
+        them; so closing a part takes the posture its opening took, which is known to reach along
+        the whole path.
         """
         what = f"{geometry.kind} handle"
         opening = end > start
@@ -502,49 +490,53 @@ class ArmPlanner:
         values = np.linspace(0.0, outer, count + 1)
         path = [grasp_pose(moved_geometry(geometry, float(v))) if v else grasp_pose(geometry) for v in values]
         builder = _Builder(self, q, base_pose, surface_z)
-        failures: list[str] = []
-        for flip in FLIPS:
-            for tilt in TILTS:
-                variant = _tilted(path[0], flip, tilt) @ _local(z=HANDLE_DEPTH_M)
-                poses = [pose @ variant for pose in path]
-                if surface_z is not None:
-                    low = min(hand_bottom(pose) for pose in (*poses, *(p @ _local(z=-APPROACH_M) for p in poses)))
-                    if low < surface_z + SURFACE_CLEARANCE_M:
-                        failures.append(f"clearance: the hand at the {what} ({poses[0][2, 3]:.3f} m high) would come "
-                                        f"{surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface at "
-                                        f"{surface_z:.3f} m")
-                        continue
-                chain = self._part_chain(builder, poses, what, opening, failures)
-                if chain is None:
-                    continue
-                swept, approach, retreat = chain
-                grasp, release = (poses[0], poses[-1]) if opening else (poses[-1], poses[0])
-                motion = PartMotion(geometry, poses[0][:3, 3], start, end)
-                backwards = approach[::-1]
-                builder.free_move(f"to the pre-grasp pose of the {what}", backwards[0])
-                builder.move(f"approach the {what}", backwards, careful=True, stop_on_contact=True, tcp_target=grasp)
-                builder.gripper("close", f"grasp the {what}", expect_held="handle")
-                builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
-                             swept if opening else swept[::-1], careful=True, tcp_target=release, part_motion=motion)
-                if not hold:
-                    builder.let_go(what, retreat)
-                info = {"grasp_pose": grasp, "release_pose": release, "flip": flip, "tilt": tilt,
-                        "kind": geometry.kind, "start": start, "end": end, "held": hold}
-                return builder.finish(skill, info)
-        raise SkillPlanError(_best_failure(failures, what))
+        failures: dict[str, list[str]] = {}
+        for way in (*level_grasps(path[0]), *handle_top_grasps(geometry)):
+            poses = [pose @ way.offset for pose in path]
+            tried = failures.setdefault(way.name, [])
+            refusal = _refusal(way, poses, geometry, surface_z, what)
+            if refusal:
+                tried.append(refusal)
+                continue
+            chain = self._part_chain(builder, poses, what, opening, way.touch, tried)
+            if chain is None:
+                continue
+            swept, approach, retreat = chain
+            grasp, release = (poses[0], poses[-1]) if opening else (poses[-1], poses[0])
+            motion = PartMotion(geometry, poses[0][:3, 3], start, end)
+            builder.free_move(f"to the pre-grasp pose of the {what}", approach[0])
+            name = f"approach the {what} from above" if way.touch else f"approach the {what}"
+            self._grasp(builder, way, name, approach, grasp, "handle", what)
+            builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
+                         swept, careful=True, tcp_target=release, part_motion=motion)
+            if not hold:
+                builder.let_go(what, retreat)
+            info = {"grasp_pose": grasp, "release_pose": release, "grasp": way.name, "kind": geometry.kind,
+                    "start": start, "end": end, "held": hold}
+            return builder.finish(skill, info)
+        raise SkillPlanError("; ".join(_best_failure(tried, what) if name == "level" else
+                                       f"{name}: {_best_failure(tried, what)}" for name, tried in failures.items()))
 
-    def _part_chain(self, builder: _Builder, poses: list[np.ndarray], what: str, opening: bool,
+    def _part_chain(self, builder: _Builder, poses: list[np.ndarray], what: str, opening: bool, touch: bool,
                     failures: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(part path from closed to open, approach, retreat) joint waypoints for one grasp variant,
-        trying the closed grasp's IK postures in turn until one reaches along the whole chain; None
-        (with the reasons in ``failures``) when none does."""
+        """(the part's path, approach, retreat) joint waypoints for one grasp variant, each in the
+        order the arm runs it (a touch grasp's approach goes on past the grasp, `_searched`, and its
+        retreat first lifts off the bar, `_lifted_off`), trying the closed grasp's IK postures in
+        turn until one reaches along the whole chain; None (with the reasons in ``failures``) when
+        none does."""
         try:
             for closed in builder.solutions(poses[0], f"grasp pose of {what}", restarts=PART_RESTARTS):
                 try:
                     swept = builder.path(closed, poses[1:], f"{'opening' if opening else 'closing'} path of {what}")
                     first, last = (closed, swept[-1]) if opening else (swept[-1], closed)
-                    approach = self._off(builder, first, poses[0 if opening else -1], f"pre-grasp pose of {what}")
-                    retreat = self._off(builder, last, poses[-1 if opening else 0], f"retreat from {what}")
+                    grasp = poses[0 if opening else -1]
+                    approach = self._off(builder, first, grasp, f"pre-grasp pose of {what}")[::-1]
+                    if touch:
+                        approach = self._searched(builder, approach, grasp, f"pre-grasp pose of {what}")
+                    off = self._lifted_off if touch else self._off
+                    retreat = off(builder, last, poses[-1 if opening else 0], f"retreat from {what}")
+                    if not opening:
+                        swept = swept[::-1]
                 except SkillPlanError as error:
                     failures.append(str(error))
                     continue
@@ -553,12 +545,40 @@ class ArmPlanner:
             failures.append(str(error))
         return None
 
+    def _searched(self, builder: _Builder, waypoints: np.ndarray, pose: np.ndarray, what: str) -> np.ndarray:
+        """``waypoints`` (ending with the TCP at ``pose``) carried on `TOUCH_SEARCH_M` further along
+        the gripper's axis: a touch grasp's approach, which stops where the fingertips touch."""
+        beyond = builder.path(waypoints[-1], line_poses(pose, pose @ local_pose(z=TOUCH_SEARCH_M), LINE_STEP_M), what)
+        return np.vstack([waypoints, beyond[1:]])
+
+    def _lifted_off(self, builder: _Builder, q: np.ndarray, pose: np.ndarray, what: str) -> np.ndarray:
+        """`_off` from a touch grasp: the fingertips, resting on the bar and opened along it, first
+        lift straight up off it by `LIFT_OFF_M`; backing off along the pitched gripper axis at once
+        would drag the bar out with them."""
+        up = _shifted(pose, LIFT_OFF_M * UP)
+        lift = builder.path(q, line_poses(pose, up, LINE_STEP_M), what)
+        return np.vstack([lift, self._off(builder, lift[-1], up, what)[1:]])
+
+    @staticmethod
+    def _grasp(builder: _Builder, way: HandleGrasp | ObjectGrasp, name: str, approach: np.ndarray,
+               pose: np.ndarray, kind: str, what: str | None = None) -> None:
+        """Approach along the joint ``approach`` to the grasp ``pose`` and close on the ``kind``
+        ("handle" or "object"): the fingers around it, or, for a touch grasp, the fingers closed
+        first and the approach ending where their tips touch it. A touch grasp's approach ends
+        past the grasp (`_searched`), so the next move comes back to it; the executor re-times
+        that move from wherever the touch stopped the arm."""
+        if way.touch:
+            builder.gripper("close", "close the fingers")
+        builder.move(name, approach, careful=True, stop_on_contact=True, tcp_target=pose,
+                     touch=kind if way.touch else None)
+        builder.gripper("close", f"grasp the {what or kind}", expect_held=kind)
+
     def _off(self, builder: _Builder, q: np.ndarray, pose: np.ndarray, what: str) -> np.ndarray:
         """Joint waypoints from ``q`` (the TCP at ``pose``) straight back along the gripper's axis by
         `APPROACH_M`, then, where that is still further out, straight back towards the base until the
         hand is `WITHDRAW_AHEAD_M` ahead of its axis (at the same height and on the same side). The
         second leg is left out when it is out of reach; the first is required."""
-        out = pose @ _local(z=-APPROACH_M)
+        out = pose @ local_pose(z=-APPROACH_M)
         waypoints = builder.path(q, line_poses(pose, out, LINE_STEP_M), what)
         local = builder.to_base @ out
         if local[0, 3] > WITHDRAW_AHEAD_M + 0.02:
@@ -573,37 +593,27 @@ class ArmPlanner:
         return waypoints
 
 
-def _tilted(grasp: np.ndarray, flip: float, tilt: float) -> np.ndarray:
-    """The grasp variant turned ``flip`` about the gripper's axis and ``tilt`` about the bar, the tilt
-    signed so that a negative one points the gripper down (a level bar grasped from above)."""
-    turned = rotation_z(flip)
-    rotation = turned @ rotation_x(tilt)
-    pointing = (grasp[:3, :3] @ rotation)[2, 2]  # the tilted approach's vertical component
-    if tilt and (pointing > 0) == (tilt < 0) and abs(pointing) > 1e-6:
-        rotation = turned @ rotation_x(-tilt)
-    return _local(rotation)
-
-
-_HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
-                          for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-
-
-def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
-    """The corners (16, 3) of the hand's and open fingers' boxes (`HAND_BOXES`) with the TCP at
-    ``tcp_pose`` (world frame)."""
-    return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
-
-
-def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
-    """The lowest point of the hand and open fingers (`HAND_BOXES`) with the TCP at ``tcp_pose`` (world z).
-
-    With ``base`` (the base's 4x4 world pose) only the corners further than ``body_radius`` from
-    its axis count: over the robot's own body there is no table (the stowed arm sits inside it).
-    """
-    corners = hand_corners(tcp_pose)
-    if base is not None:
-        corners = corners[np.hypot(corners[:, 0] - base[0, 3], corners[:, 1] - base[1, 3]) > body_radius]
-    return float(corners[:, 2].min()) if len(corners) else math.inf
+def _refusal(way: HandleGrasp, poses: list[np.ndarray], geometry: PartGeometry, surface_z: float | None,
+             what: str) -> str:
+    """Why ``way`` cannot hold the handle along ``poses`` ("" when nothing says so): the hand would
+    come down onto the surface (at a pose, backed off from it along its axis as approaches and
+    retreats are, or, for a touch grasp, searching on past the grasp at either end), or a grasp
+    from above would reach into the part's front (the level grasp keeps out in front of it, the
+    fingers across the bar)."""
+    ends = [poses[0], poses[-1]]
+    searched = [pose @ local_pose(z=TOUCH_SEARCH_M) for pose in ends] if way.touch else []
+    if surface_z is not None:
+        low = min(hand_bottom(pose) for pose in (*poses, *(p @ local_pose(z=-APPROACH_M) for p in poses), *searched))
+        if low < surface_z + SURFACE_CLEARANCE_M:
+            return (f"clearance: the hand at the {what} ({geometry.handle_point[2]:.3f} m high) would come "
+                    f"{surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface at {surface_z:.3f} m")
+    if way.touch:
+        gap = min(front_clearance(pose, geometry) for pose in (poses[0], searched[0]))
+        if not math.isfinite(gap):
+            return f"clearance: how far the front lies behind the {what} is unknown"
+        if gap < 0:
+            return f"clearance: the hand on the {what} would reach {-gap:.3f} m into the front"
+    return ""
 
 
 class _Builder:
@@ -714,12 +724,14 @@ class _Builder:
         return chains
 
     def move(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
-             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None) -> None:
-        self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion))
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
+             touch: str | None = None) -> None:
+        self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion, touch))
         self.q = self.steps[-1].waypoints[-1].copy()
 
     def step(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
-             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None) -> Step:
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
+             touch: str | None = None) -> Step:
         """A move through joint ``waypoints`` from where the plan has the arm (prepended if missing)."""
         planner = self.planner
         speed = planner.careful_speed if careful else planner.free_speed
@@ -735,7 +747,8 @@ class _Builder:
         self.trajectory_s += time.perf_counter() - began
         samples = trajectory.positions[1:] if len(trajectory.positions) > 1 else trajectory.positions
         samples = planner.kin.clip(samples)  # Ruckig may overshoot a waypoint on a limit by 1e-16
-        return Step("move", name, samples, planner.dt, waypoints, speed, stop_on_contact, tcp_target, part_motion)
+        return Step("move", name, samples, planner.dt, waypoints, speed, stop_on_contact, tcp_target, part_motion,
+                    touch=touch)
 
     def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True) -> None:
         """A joint-space move to ``goal``, by way of the ready pose when the arm starts or ends stowed
@@ -798,33 +811,6 @@ class _Builder:
         planning_ms = 1e3 * (time.perf_counter() - self.began)
         return SkillPlan(skill, tuple(self.steps), self.base_pose, self.start, self.q.copy(), 1e3 * self.ik_s,
                          self.ik_solves, 1e3 * self.trajectory_s, planning_ms, info)
-
-
-def _closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float],
-                        opening: float) -> list[np.ndarray]:
-    """Horizontal directions for the fingers to close along (the TCP's y) on an object with box
-    ``size``, best first, each followed by its opposite (the hand turned half a turn).
-
-    First across the line of sight from the base: a camera on the robot places a thing best across
-    that line and worst along it (it sees only its near side), and fingers closing across the line
-    of sight forgive an error along it. Then the box's narrower axis, the other, the diagonals.
-    Only directions along which the box fits between the fingers are kept.
-    """
-    base = np.asarray(base_pose[:2], dtype=float)
-    sight = point[:2] - base
-    sight = sight / np.linalg.norm(sight) if np.linalg.norm(sight) > 1e-6 else np.array([1.0, 0.0])
-    narrow, wide = ((1.0, 0.0), (0.0, 1.0)) if size[0] <= size[1] else ((0.0, 1.0), (1.0, 0.0))
-    diagonal = math.sqrt(0.5)
-    candidates = [(-sight[1], sight[0]), narrow, wide, (diagonal, diagonal), (diagonal, -diagonal)]
-    found: list[np.ndarray] = []
-    for x, y in candidates:
-        if abs(x) * size[0] + abs(y) * size[1] > opening:
-            continue
-        for sign in (1.0, -1.0):
-            direction = np.array([sign * x, sign * y, 0.0])
-            if all(np.linalg.norm(direction - other) > 1e-6 for other in found):
-                found.append(direction)
-    return found
 
 
 def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],

@@ -26,11 +26,10 @@ def test_what_a_drawer_hides_is_found_and_every_drawer_is_shut_again() -> None:
     row = run_robot("drawer-only", 0)
     assert row["object_recovery"] == 1.0  # the soap in the middle drawer of the second chest
     assert row["state_recovered"]
-    # The two bottom drawers' handles sit too low over the table for the hand: refused at planning,
-    # said so, and their open actions stay unexplored.
-    assert len(row["failed_actions"]) == 2
-    assert all("too low over the surface" in reason for reason in row["failed_actions"])
-    assert row["unexplored_space"] == pytest.approx(0.4)
+    # The two bottom drawers' handles sit too low over the table for the hand across the bar: they
+    # are grasped from above, opened, looked into and shut like the others.
+    assert row["failed_actions"] == []
+    assert row["success"] and row["unexplored_space"] == 0.0
 
 
 def test_memory_ids_are_put_in_the_ground_truth_s_terms_by_their_last_segmentation_id() -> None:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis, moved_geometry
+from skills.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance
 from skills.plan import (
     APPROACH_M,
     READY,
@@ -36,8 +37,10 @@ def planner() -> ArmPlanner:
     return ArmPlanner.from_description(robot_description(CameraConfig()))
 
 
-def _drawer(height: float = 1.0, x: float = 0.3) -> PartGeometry:
-    return PartGeometry("drawer", np.array([x, 0.05, height]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]))
+def _drawer(height: float = 1.0, x: float = 0.3, front_depth: float | None = 0.035) -> PartGeometry:
+    """A drawer's level bar, its front ``front_depth`` behind it (a tabletop chest's, as perception has it)."""
+    return PartGeometry("drawer", np.array([x, 0.05, height]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]),
+                        front_depth=front_depth)
 
 
 def _door() -> PartGeometry:
@@ -144,22 +147,91 @@ def test_closing_retraces_the_opening_from_where_the_part_stands(planner: ArmPla
 
 def test_planning_errors_name_the_stage_and_the_target(planner: ArmPlanner) -> None:
     q = np.array(STOWED)
-    with pytest.raises(SkillPlanError, match=r"clearance: the hand at the drawer handle \(0\.800 m high\) would come"):
-        planner.plan_open(q, BASE, _drawer(height=0.80), 0.2, surface_z=SURFACE)
+    low = r"clearance: the hand at the drawer handle \(0\.770 m high\) would come 0\.\d+ m too low over the surface"
+    with pytest.raises(SkillPlanError, match=rf"^{low} .*; from above: {low}"):  # 1.5 cm over the table
+        planner.plan_open(q, BASE, _drawer(height=0.77), 0.2, surface_z=SURFACE)
+    with pytest.raises(SkillPlanError, match=r"from above: clearance: how far the front lies behind the drawer handle "
+                                             r"is unknown"):
+        planner.plan_open(q, BASE, _drawer(height=0.80, front_depth=None), 0.2, surface_z=SURFACE)
     with pytest.raises(SkillPlanError, match=r"IK: grasp pose of drawer handle unreachable: target .* beyond the arm"):
         planner.plan_open(q, BASE, PartGeometry("drawer", np.array([0.3, 1.5, 1.0]), np.array([1.0, 0, 0]),
                                                 np.array([0.0, -1.0, 0.0])), 0.2)
     with pytest.raises(SkillPlanError, match=r"amount: 0\.9 m must lie in \(0, 0\.6\] for a drawer"):
         planner.plan_open(q, BASE, _drawer(), 0.9)
-    with pytest.raises(SkillPlanError, match=r"pick: the object is 0\.100 m across at its narrowest, too wide"):
-        planner.plan_pick(q, BASE, (0.3, -0.2, 0.87), (0.1, 0.12, 0.1), (0.5, -0.2, 0.87))
+    with pytest.raises(SkillPlanError, match=r"^IK: above the object unreachable: .* \(and \d+ other grasp variants"):
+        planner.plan_pick(q, BASE, (0.3, 1.4, 0.87), (0.1, 0.12, 0.1), (0.5, -0.2, 0.87))  # too far, too wide
     with pytest.raises(SkillPlanError, match=r"place_point: expected 3 finite numbers"):
         planner.plan_pick(q, BASE, (0.3, -0.2, 0.87), (0.06, 0.06, 0.1), (0.5, math.nan, 0.87))
+
+
+def test_a_drawer_too_low_for_the_level_grasp_is_grasped_from_above(planner: ArmPlanner) -> None:
+    geometry = _drawer(height=0.80)  # 4.5 cm over the table: the hand across the bar would reach 10 cm below it
+    plan = planner.plan_open(np.array(STOWED), BASE, geometry, 0.2, surface_z=SURFACE)
+    assert plan.info["grasp"] == "from above" and plan.describe().startswith("open_drawer (from above grasp): ")
+    assert [s.name for s in plan.steps] == [
+        "to the pre-grasp pose of the drawer handle", "close the fingers", "approach the drawer handle from above",
+        "grasp the drawer handle", "pull the drawer open", "let go of the drawer handle", "back off the drawer handle"]
+    _check_runnable(plan, np.array(STOWED))
+    _, shut, approach, grasp_step, pull, _, _ = plan.steps
+    assert shut.action == "close" and shut.expect_held is None and grasp_step.expect_held == "handle"
+    assert approach.touch == "handle" and approach.stop_on_contact and pull.touch is None
+    grasp = plan.info["grasp_pose"]
+    tips = grasp[:3, 3] + FINGERTIP_M * grasp[:3, 2]
+    assert tips == pytest.approx(geometry.handle_point + [0, 0, HANDLE_TOP_M], abs=1e-6)  # on the bar's top
+    assert abs(grasp[:3, 1] @ geometry.handle_axis) > 0.999  # the fingers' span along the bar
+    assert math.radians(25) < math.acos(-grasp[2, 2]) < math.radians(55)  # pointing down, pitched
+    assert grasp[:3, 2] @ -geometry.normal > 0  # ... into the front: the hand leans out
+    # the approach comes down the gripper's axis and goes on past the bar's top, to find it by touch
+    searched = _tcp(planner, approach.samples[-1])
+    assert searched[:3, 3] - grasp[:3, 3] == pytest.approx(TOUCH_SEARCH_M * grasp[:3, 2], abs=0.002)
+    # what follows comes back to the grasp: the executor re-times it from wherever the touch stopped the arm
+    assert _close_pose(_tcp(planner, pull.waypoints[1]), grasp)
+    pulled = _tcp(planner, pull.samples[-1])
+    assert pulled[:3, 3] - grasp[:3, 3] == pytest.approx(0.2 * geometry.normal, abs=0.003)
+    base = base_transform(BASE)
+    for step in plan.steps:  # clear of the table and in front of the front all the way
+        for q in [] if step.samples is None else step.samples[::3]:
+            assert hand_bottom(base @ planner.kin.forward(q), base, planner.body_radius) >= SURFACE + 0.01
+    assert front_clearance(grasp, geometry) > 0.01 and front_clearance(searched, geometry) > 0
+
+    closing = planner.plan_close(plan.final_q, BASE, geometry, 0.2, surface_z=SURFACE)
+    assert closing.info["grasp"] == "from above" and closing.steps[2].touch == "handle"
+    _check_runnable(closing, plan.final_q)
+    retreat = closing.steps[-1]  # let go, the fingertips lift straight off the bar before backing off
+    offsets = [_tcp(planner, q)[:3, 3] - closing.info["release_pose"][:3, 3] for q in retreat.waypoints]
+    lifted = [offset for offset in offsets if offset[2] < LIFT_OFF_M + 0.001]
+    assert lifted[-1] == pytest.approx([0.0, 0.0, LIFT_OFF_M], abs=0.002)
+    assert all(np.linalg.norm(offset[:2]) < 0.002 for offset in lifted)
+    level = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.90), 0.2, surface_z=SURFACE)
+    assert level.info["grasp"] == "level"  # first choice where it fits
+
+
+def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner: ArmPlanner) -> None:
+    top, place = np.array([0.25, -0.15, 0.87]), np.array([0.45, -0.2, 0.87])
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.12, 0.15, 0.115), place, surface_z=SURFACE)
+    assert plan.info["grasp"] == "fingertips-on-top"
+    assert [s.name for s in plan.steps] == ["to above the object", "close the fingers", "down onto the object's top",
+                                            "grasp the object", "lift", "carry", "lower", "put the object down",
+                                            "back up", "to ready"]
+    _check_runnable(plan, np.array(STOWED))
+    steps = {step.name: step for step in plan.steps}
+    assert steps["close the fingers"].expect_held is None and steps["grasp the object"].expect_held == "object"
+    down = steps["down onto the object's top"]
+    assert down.touch == "object" and down.stop_on_contact
+    grasp = plan.info["grasp_pose"]
+    assert grasp[:3, 2] @ [0, 0, -1] > 0.999
+    assert grasp[:3, 3] == pytest.approx(top + [0, 0, FINGERTIP_M], abs=1e-9)  # the fingertips on the top
+    assert _tcp(planner, down.samples[-1])[:3, 3] == pytest.approx(top + [0, 0, FINGERTIP_M - TOUCH_SEARCH_M],
+                                                                   abs=0.002)
+    assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), grasp)  # lifted from the top, not from below
+    release = _tcp(planner, steps["lower"].samples[-1])
+    assert release[:3, 3] == pytest.approx(place + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
 
 
 def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_place(planner: ArmPlanner) -> None:
     top, place = np.array([0.25, -0.15, 0.87]), np.array([0.45, -0.2, 0.87])
     plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.066, 0.07, 0.12), place, surface_z=SURFACE)
+    assert plan.info["grasp"] == "fingers-around"
     assert [s.name for s in plan.steps] == ["to above the object", "down onto the object", "grasp the object", "lift",
                                             "carry", "lower", "put the object down", "back up", "to ready"]
     assert plan.steps[2].expect_held == "object"

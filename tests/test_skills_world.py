@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -189,6 +190,80 @@ def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) 
                                             object_extent=np.ptp(there.points(), axis=0), place_point=top))
     assert back.ok, back.reason
     returned = _pixels(_observe(link), can.instance_id).mean(axis=0)
+    assert np.linalg.norm(returned - start) < 0.02
+
+
+def _contacts_other_than(result: SkillResult, *categories: str) -> list[str]:
+    """What the arm touched over a skill, beyond the given kinds of thing."""
+    return [f"{c['category']} ({c['robot_link']})" for c in result.contacts if c["category"] not in categories]
+
+
+@pytest.mark.slow
+def test_a_drawer_too_low_for_the_level_grasp_is_opened_from_above_and_closed(link: WorldLink) -> None:
+    scene = tabletop_variant("drawer-only", 8)
+    placement = next(pl for _, pl in scene.storage if len(pl.model.parts) == 3)
+    bar = placement.to_world(handle_boxes(placement.model, placement.model.part("drawer_0"))[0].center)
+    handle_id = placement.part_ids()["drawer_0_handle"]
+    memory, geometry, surface_z, observation = _perceive_part(link, scene, placement, "drawer_0")
+    assert bar[2] - surface_z < 0.07  # the bar's centre 6 cm over the table: the level grasp reaches 10 cm below
+    closed = _pixels(observation, handle_id).mean(axis=0)
+
+    opened = _run(OpenDrawer, link, SkillTarget(geometry=geometry, amount=0.21, surface_z=surface_z))
+    assert opened.ok, opened.reason
+    assert opened.info["grasp"] == "from above" and opened.achieved is not None and opened.achieved >= 0.2
+    shift = closed - _pixels(_observe(link, memory), handle_id).mean(axis=0)
+    assert shift[1] >= 0.2 and abs(shift[0]) < 0.01 and abs(shift[2]) < 0.01  # out along -y, by 0.2 m or more
+    assert _contacts_other_than(opened, "handle") == []  # the hand touched neither table nor front
+
+    closed_again = _run(CloseDrawer, link, SkillTarget(geometry=geometry, amount=opened.achieved,
+                                                       surface_z=surface_z))
+    assert closed_again.ok, closed_again.reason
+    assert closed_again.info["grasp"] == "from above" and abs(closed_again.achieved) < 0.02
+    assert np.linalg.norm(closed - _pixels(_observe(link), handle_id).mean(axis=0)) < 0.02
+    assert _contacts_other_than(closed_again, "handle") == []
+
+    # the bar taken 5 cm further out than it is: the closed fingertips come down on nothing, and open again
+    short = replace(geometry, handle_point=geometry.handle_point + 0.05 * geometry.normal,
+                    front_depth=geometry.front_depth + 0.05)
+    missed = _run(OpenDrawer, link, SkillTarget(geometry=short, amount=0.1, surface_z=surface_z))
+    assert not missed.ok and "grasp the drawer handle: the gripper closed on nothing" in missed.reason, missed.reason
+    assert link.call("arm_state").meta["gripper_width"] > 0.07
+
+
+@pytest.mark.slow
+def test_a_box_wider_than_the_gripper_is_picked_away_by_its_top_and_put_back(link: WorldLink) -> None:
+    scene = tabletop_variant("recursive", 2)
+    box = next(obj for obj in scene.objects if obj.category == "box" and obj.relation == "on")
+    link.call("reset", {"seed": scene.seed, "tabletop": scene.task})
+    memory = InstanceMemory()
+    observation = _observe(link, memory)
+    seen = _nearest(memory.with_label("box"), np.array(box.center))
+    x, y, yaw = observation.base_pose
+    assert link.call("move_base", {"path": [[float(seen.centroid[0]), y]], "yaw": yaw}).meta["reached"]
+    observation = _observe(link, memory)
+    start = _pixels(observation, box.instance_id).mean(axis=0)
+
+    seen = memory.get(seen.id)
+    top, extent = top_grasp_point(seen.points()), np.ptp(seen.points(), axis=0)
+    assert min(extent[:2]) > 0.08  # wider than the gripper opens, every way
+    table = memory.with_label("table")[0]
+    others = [inst.points() for inst in memory.live() if inst.id != table.id]
+    toward_robot = np.array(observation.base_pose[:2]) - top[:2]
+    spot = idle_spot(table.points(), others, float(max(extent[:2])) / 2, top[:2] + 0.2 * toward_robot)
+    place = np.array([spot[0], spot[1], top[2] + spot[2] - _surface_z(memory)])
+    away = _run(PickAway, link, SkillTarget(object_point=top, object_extent=extent, place_point=place,
+                                            surface_z=_surface_z(memory)))
+    assert away.ok, away.reason
+    assert away.info["grasp"] == "fingertips-on-top" and away.held is None
+    moved = _pixels(_observe(link, memory), box.instance_id).mean(axis=0)
+    assert np.linalg.norm(moved[:2] - (start[:2] + place[:2] - top[:2])) < 0.02  # it stands at the spot
+    assert abs(moved[2] - start[2]) < 0.01  # on the table
+
+    there = _nearest([inst for inst in memory.with_label("box") if inst.last_seen == memory.frame], place)
+    back = _run(PickBack, link, SkillTarget(object_point=top_grasp_point(there.points()), object_extent=extent,
+                                            place_point=top, surface_z=_surface_z(memory)))
+    assert back.ok, back.reason
+    returned = _pixels(_observe(link), box.instance_id).mean(axis=0)
     assert np.linalg.norm(returned - start) < 0.02
 
 

@@ -21,8 +21,9 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
   still stands open is tried once more, from a fresh look at how far it stands open (a door let go
   may swing on, or be held back by something, and a grasp aimed where it was misses);
 - pick away: the base level with the object, a free spot on the surface it stands on
-  (`idle_spot`, towards the robot), the grasp point on top; pick back: from where it was put down
-  to where it was.
+  (`idle_spot`, towards the robot, out of what the doors and drawers sweep as they open and of the
+  lanes to their handles), the grasp point on top; pick back: from where it was put down to where
+  it was.
 
 What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled out, a door swung,
 a cup put down elsewhere keep their identity, so the graph gains what was revealed and nothing
@@ -60,7 +61,7 @@ from agent.planning.route import Routes
 from agent.runtime.world_link import WorldLink
 from skills import base as skill_base
 from skills.plan import ArmPlanner, SkillPlanError, idle_spot, stand_pose
-from skills.primitives import PRIMITIVES
+from skills.primitives import DEFAULT_AMOUNT, PRIMITIVES
 from skills.stand import NoStandError, StandConfig, choose_stand
 from skills.stow import Stow
 
@@ -375,7 +376,7 @@ class Robot:
         others = [inst.points() for inst in self.memory.live() if inst.id != surface.id]
         toward = np.asarray(self.home[:2]) - top[:2]
         near = top[:2] + self.config.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
-        spot = idle_spot(surface.points(), others, float(max(extent[:2])) / 2, near)
+        spot = idle_spot(surface.points(), [*others, *self._kept_clear()], float(max(extent[:2])) / 2, near)
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
         result = self._skill(call.primitive, skill_base.SkillTarget(
             object_point=top, object_extent=extent, place_point=place, surface_z=float(spot[2]),
@@ -386,6 +387,29 @@ class Robot:
         self.away[obj.id] = _Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
         return SkillResult(True)
+
+    def _kept_clear(self) -> list[np.ndarray]:
+        """Where no idle spot may be: the space every remembered door and drawer sweeps as the skills
+        open it (`DEFAULT_AMOUNT`), and the lane its handle is reached along, from the robot's side
+        straight in. A thing put down there blocks the part it was moved away for, or the arm on
+        its way to it."""
+        assert self.home is not None
+        kept = []
+        for handle in self.memory.with_label("handle"):
+            if handle.parent is None:
+                continue
+            part = self.memory.get(handle.parent)
+            try:
+                geometry = handle_geometry(self.memory, handle.id, self._eye, kind=part.label)
+            except GeometryError:
+                continue
+            points = part.points()
+            for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], 6):
+                motion = part_motion(geometry, float(amount))
+                kept.append(points @ motion[:3, :3].T + motion[:3, 3])
+            out = max(0.0, float((np.asarray(self.home[:2]) - geometry.handle_point[:2]) @ geometry.normal[:2]))
+            kept.append(geometry.handle_point + np.arange(0.0, out, 0.05)[:, None] * geometry.normal)
+        return kept
 
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
         away = self._remembered(self.away, obj)

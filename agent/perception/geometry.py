@@ -70,7 +70,10 @@ class PartGeometry:
     face, and ``hinge_axis`` the line's direction, signed so that opening is a positive rotation
     about it; both are None for drawers. ``width``: for doors, how far the front reaches from the
     hinge line (to its free edge, a little beyond the handle): the radius of what the door sweeps
-    as it swings, which whoever opens it must stand clear of; None when unknown.
+    as it swings, which whoever opens it must stand clear of; None when unknown. ``front_depth``:
+    how far the front's outer face lies behind the handle point (along -``normal``): the room
+    between bar and front that a hand coming down on the bar from above must keep out of; None
+    when unknown.
     """
 
     kind: str
@@ -80,6 +83,7 @@ class PartGeometry:
     hinge_point: np.ndarray | None = None
     hinge_axis: np.ndarray | None = None
     width: float | None = None
+    front_depth: float | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -199,13 +203,15 @@ def part_geometry(
     axis = snap_handle_axis(principal_axis(handle), vertical_cos)
     kind = kind or classify_part(axis, vertical_cos)
     near = front[np.linalg.norm(front - handle_point, axis=1) <= near_m]
-    normal = front_normal(near if len(near) >= 10 else front, toward, level)
+    around = near if len(near) >= 10 else front
+    normal = front_normal(around, toward, level)
     axis = _unit(axis - (axis @ normal) * normal, "handle_axis: parallel to the front normal")
+    depth = -float(np.median((around - handle_point) @ normal))
     if kind == "drawer":
-        return PartGeometry("drawer", handle_point, axis, normal)
+        return PartGeometry("drawer", handle_point, axis, normal, front_depth=depth)
     hinge_point = hinge_line_point(front, handle_point, axis, normal)
     return PartGeometry("door", handle_point, axis, normal, hinge_point, hinge_axis(handle_point, hinge_point, normal),
-                        door_width(front, handle_point, hinge_point, axis, normal))
+                        door_width(front, handle_point, hinge_point, axis, normal), depth)
 
 
 def hinge_line_point(front_points: np.ndarray, handle_point: np.ndarray, handle_axis: np.ndarray,
@@ -314,7 +320,7 @@ def moved_geometry(geometry: PartGeometry, amount: float) -> PartGeometry:
     rotation = move[:3, :3]
     return PartGeometry(geometry.kind, move[:3, :3] @ geometry.handle_point + move[:3, 3],
                         rotation @ geometry.handle_axis, rotation @ geometry.normal,
-                        geometry.hinge_point, geometry.hinge_axis, geometry.width)
+                        geometry.hinge_point, geometry.hinge_axis, geometry.width, geometry.front_depth)
 
 
 def fit_opening(geometry: PartGeometry, closed_points: np.ndarray, seen_points: np.ndarray, most: float,

@@ -1,0 +1,230 @@
+"""The hand's shape, and the grasps that hold a thing by resting the closed fingertips on its top.
+
+The world holds whatever the closed fingers touch (`worlds.sim.World.gripper`): a handle is tied
+to the hand, an object carried with it. A thing need not fit between the fingers to be held, then:
+with the fingers closed first, their tips brought down onto its top until they touch, closing
+again holds it. Two grasps do that where the usual one (the fingers open around a bar or an
+object, closing across it) cannot:
+
+- a level bar from above (`handle_top_grasps`). The usual grasp of a bar (`level_grasps`) closes
+  with one finger above it and one below, so the hand, 21 cm across its fingers' travel, reaches
+  10.6 cm below the bar (`HAND_BOXES`): into the table under a drawer whose handle is less than
+  ~9 cm over it. From above, the fingers' span lies along the bar and the hand points down at it,
+  pitched towards the front (`TOP_PITCHES`) so that it leans out, away from the front and from
+  the handles of the drawers above (at 30° or more, all of the hand 9.5 cm above the bar stands
+  4 cm or more further out than the bar's centre). The drawer is then pulled along its line as the
+  level grasp pulls it;
+- an object's top (`object_grasps`): an object wider than the opening (an open-bottom box, a jar,
+  a bottle) is held by the closed fingertips on its top (a box's lid), the fingers closing along
+  the directions the usual grasp would, best first.
+
+Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
+surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
+and ends on the first touch (`skills.plan.Step.touch`); what follows is planned from where the
+top was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
+fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
+which would drag the bar out with them.
+
+Hand geometry for clearance checks: `hand_corners`, `hand_bottom` (what must stay above a table)
+and `front_clearance` (how far the hand stays in front of a part's front).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from agent.perception.geometry import PartGeometry, grasp_pose
+
+UP = np.array([0.0, 0.0, 1.0])
+#: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision
+#: meshes): what must stay above a surface (``surface_z``) while the hand works at a handle.
+HAND_BOXES = (((-0.034, -0.106, -0.131), (0.034, 0.106, -0.035)),
+              ((-0.012, -0.068, -0.045), (0.012, 0.068, 0.011)))
+#: How far the fingertips reach past the TCP along its axis: the Panda's finger collision mesh is
+#: 53.8 mm long from its joint, 58.4 mm down the hand; the TCP is 103.4 mm down the hand.
+FINGERTIP_M = 0.009
+#: Where a level bar's top is expected above the centre of its points: half a 1.6 cm bar. Only
+#: where the approach is aimed; the touch finds the top.
+HANDLE_TOP_M = 0.008
+#: How far a touch grasp's approach goes on past where the top is expected.
+TOUCH_SEARCH_M = 0.02
+#: How far fingertips that held a bar from above lift straight up off it before backing off.
+LIFT_OFF_M = 0.02
+#: Pitches (rad from straight down, towards the front) of grasps on a level bar from above, best first.
+TOP_PITCHES = tuple(math.radians(degrees) for degrees in (40.0, 30.0, 50.0))
+#: A level bar: its axis within this (sine) of horizontal.
+LEVEL_SIN = 0.1
+#: How far past the perceived handle point (along the approach) the TCP closes in a level grasp:
+#: the centre of a bar's voxels lies within a few millimetres of its axis when its face and top
+#: are both seen.
+HANDLE_DEPTH_M = 0.0
+#: Level grasp variants tried in order: half turns about the gripper's axis, tilts about the
+#: handle's bar (negative: the gripper points down onto a level bar, the hand above it; `tilted`).
+FLIPS = (0.0, math.pi)
+TILTS = (0.0, -0.3, 0.3, -0.15, 0.15)
+
+
+@dataclass(frozen=True, eq=False)
+class HandleGrasp:
+    """One way of holding a handle. ``offset``: the TCP's pose relative to the part's `grasp_pose`,
+    so that the grasp rides along the part's path; ``name``: what plans and reasons call it;
+    ``touch``: the fingers close before the approach, which ends on touching the handle."""
+
+    offset: np.ndarray
+    name: str
+    touch: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectGrasp:
+    """A top-down grasp at an object's grasp point (the middle of its top): the TCP's ``rotation``,
+    ``depth`` how far below the grasp point the TCP closes (negative: above it, the fingertips on
+    the top), ``name`` as plans say it, ``touch`` as for `HandleGrasp`."""
+
+    rotation: np.ndarray
+    depth: float
+    name: str
+    touch: bool = False
+
+
+_HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
+                          for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+
+
+def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
+    """The corners (16, 3) of the hand's and open fingers' boxes (`HAND_BOXES`) with the TCP at
+    ``tcp_pose`` (world frame)."""
+    return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+
+
+def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
+    """The lowest point of the hand and open fingers (`HAND_BOXES`) with the TCP at ``tcp_pose`` (world z).
+
+    With ``base`` (the base's 4x4 world pose) only the corners further than ``body_radius`` from
+    its axis count: over the robot's own body there is no table (the stowed arm sits inside it).
+    """
+    corners = hand_corners(tcp_pose)
+    if base is not None:
+        corners = corners[np.hypot(corners[:, 0] - base[0, 3], corners[:, 1] - base[1, 3]) > body_radius]
+    return float(corners[:, 2].min()) if len(corners) else math.inf
+
+
+def front_clearance(tcp_pose: np.ndarray, geometry: PartGeometry) -> float:
+    """How far the hand (`HAND_BOXES`) with the TCP at ``tcp_pose`` keeps in front of the part's
+    front face, its nearest corner's (negative: through it); -inf when the front's depth is unknown."""
+    if geometry.front_depth is None:
+        return -math.inf
+    ahead = (hand_corners(tcp_pose) - geometry.handle_point) @ geometry.normal
+    return float(ahead.min() + geometry.front_depth)
+
+
+def rotation_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_x(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def local_pose(rotation: np.ndarray | None = None, z: float = 0.0) -> np.ndarray:
+    """A transform in the TCP's own frame: a rotation, then a shift along its (new) z."""
+    pose = np.eye(4)
+    if rotation is not None:
+        pose[:3, :3] = rotation
+    pose[:3, 3] = pose[:3, :3] @ [0.0, 0.0, z]
+    return pose
+
+
+def tilted(grasp: np.ndarray, flip: float, tilt: float) -> np.ndarray:
+    """The grasp variant turned ``flip`` about the gripper's axis and ``tilt`` about the bar, the tilt
+    signed so that a negative one points the gripper down (a level bar grasped from above)."""
+    turned = rotation_z(flip)
+    rotation = turned @ rotation_x(tilt)
+    pointing = (grasp[:3, :3] @ rotation)[2, 2]  # the tilted approach's vertical component
+    if tilt and (pointing > 0) == (tilt < 0) and abs(pointing) > 1e-6:
+        rotation = turned @ rotation_x(-tilt)
+    return local_pose(rotation)
+
+
+def level_grasps(closed: np.ndarray) -> list[HandleGrasp]:
+    """The usual grasps of a handle whose `grasp_pose` is ``closed``: the fingers open across the
+    bar, the hand square to the front, turned by `FLIPS` and tilted about the bar by `TILTS`."""
+    return [HandleGrasp(tilted(closed, flip, tilt) @ local_pose(z=HANDLE_DEPTH_M), "level") for flip in FLIPS
+            for tilt in TILTS]
+
+
+def top_rotation(closing: np.ndarray, pitch: float = 0.0, into: np.ndarray | None = None) -> np.ndarray:
+    """The TCP's rotation pointing down, turned ``pitch`` (rad) towards the horizontal ``into``, its
+    fingers closing along the horizontal ``closing`` (columns: x, y = closing, z = the approach)."""
+    y = np.asarray(closing, dtype=float) / np.linalg.norm(closing)
+    z = -math.cos(pitch) * UP
+    if into is not None:
+        z = z + math.sin(pitch) * np.asarray(into, dtype=float)
+    return np.column_stack([np.cross(y, z), y, z])
+
+
+def fingertips_on(rotation: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """The TCP pose with ``rotation`` whose closed fingertips' ends meet at ``point``."""
+    pose = np.eye(4)
+    pose[:3, :3] = rotation
+    pose[:3, 3] = np.asarray(point, dtype=float) - FINGERTIP_M * rotation[:, 2]
+    return pose
+
+
+def handle_top_grasps(geometry: PartGeometry) -> list[HandleGrasp]:
+    """Grasps of a drawer's level bar from above (see the module docstring): every pitch of
+    `TOP_PITCHES`, each with the hand either way round along the bar. None for doors (the bar
+    turns with the door) or a bar that is not level."""
+    axis = np.asarray(geometry.handle_axis, dtype=float)
+    if geometry.kind != "drawer" or abs(axis[2]) > LEVEL_SIN:
+        return []
+    to_closed = np.linalg.inv(grasp_pose(geometry))
+    top = geometry.handle_point + HANDLE_TOP_M * UP
+    into = -np.asarray(geometry.normal, dtype=float)
+    return [HandleGrasp(to_closed @ fingertips_on(top_rotation(sign * axis, pitch, into), top),
+                        "from above", touch=True)
+            for pitch in TOP_PITCHES for sign in (1.0, -1.0)]
+
+
+def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float]) -> list[np.ndarray]:
+    """Horizontal directions for the fingers to close along (the TCP's y) on an object with box
+    ``size`` at ``point``, best first, each followed by its opposite (the hand turned half a turn).
+
+    First across the line of sight from the base: a camera on the robot places a thing best across
+    that line and worst along it (it sees only its near side), and fingers closing across the line
+    of sight forgive an error along it. Then the box's narrower axis, the other, the diagonals.
+    """
+    sight = np.asarray(point[:2], dtype=float) - np.asarray(base_pose[:2], dtype=float)
+    sight = sight / np.linalg.norm(sight) if np.linalg.norm(sight) > 1e-6 else np.array([1.0, 0.0])
+    narrow, wide = ((1.0, 0.0), (0.0, 1.0)) if size[0] <= size[1] else ((0.0, 1.0), (1.0, 0.0))
+    diagonal = math.sqrt(0.5)
+    found: list[np.ndarray] = []
+    for x, y in [(-sight[1], sight[0]), narrow, wide, (diagonal, diagonal), (diagonal, -diagonal)]:
+        for sign in (1.0, -1.0):
+            direction = np.array([sign * x, sign * y, 0.0])
+            if all(np.linalg.norm(direction - other) > 1e-6 for other in found):
+                found.append(direction)
+    return found
+
+
+def across(size: np.ndarray, direction: np.ndarray) -> float:
+    """How wide a box of ``size`` is along the horizontal ``direction``."""
+    return float(abs(direction[0]) * size[0] + abs(direction[1]) * size[1])
+
+
+def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float], opening: float,
+                  depth: float) -> list[ObjectGrasp]:
+    """Top-down grasps of an object with box ``size`` whose grasp point is ``point``, best first:
+    the fingers around it, ``depth`` below the point, along each of `closing_directions` it fits
+    within ``opening``; where it fits along none, the closed fingertips on its top along each."""
+    directions = closing_directions(size, point, base_pose)
+    around = [d for d in directions if across(size, d) <= opening]
+    if around:
+        return [ObjectGrasp(top_rotation(d), depth, "fingers-around") for d in around]
+    return [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
