@@ -4,6 +4,7 @@ QUESTION = "question"  # str
 CHOICES = "choices"  # list[str], four of them, padded
 BUDGET = "budget"  # int, steps
 OBSERVATION = "observation"  # agent.observation.Observation, the newest frame
+INSIDE_VIEW = "inside_view"  # agent.observation.Observation, what the VLM is shown of storage just opened
 MAP = "map"  # agent.mapping.occupancy.ExplorationMap
 ANSWER_LOG = "answer_log"  # agent.eqa.answers.AnswerLog
 PLAN = "plan"  # agent.planning.explore.MovePlan, the next move

@@ -7,18 +7,22 @@
     ├─ Out of budget (sequence)     BudgetSpent → AnswerFallback
     └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → UpdatePredictionSet → Act → Next move
                                     Act (selector):       Confident enough (CheckConfidence)
-                                                          or Look inside: LookInside → QueryVLM → UpdatePredictionSet
+                                                          or Look inside: LookInside → QueryVLM inside → UpdatePredictionSet
                                                           or Nothing to open
                                     Next move (selector): StopHere (CheckConfidence)
                                                           or Go on: [QueryDirections] → Explore
-                                    Explore (sequence):   SelectFrontier → Move or finish
+                                    Explore (sequence):   Where to (selector) → Move or finish
+                                    Where to (selector):  ApproachStorage or SelectFrontier
                                     Move or finish (sel.): NothingLeftToExplore (no frontier planned)
                                                           or Navigate
 
 The stopping rule (conformal prediction by default) decides in UpdatePredictionSet; a confident
 robot skips its next move and answers on the following tick. QueryDirections (the VLM's semantic
 values of directions) is there for the semantic methods only. LookInside opens the storage a
-question asks what is in, when it is in view, so that the VLM sees inside (`behaviours.look_inside`).
+question asks what is in, when it is in view, every door and drawer of it, so that the VLM sees
+inside (the views side by side, on the blackboard's ``inside_view``: `behaviours.look_inside`);
+ApproachStorage, there with the act branch, goes to look at such storage seen farther off before
+any frontier is chosen (`behaviours.approach_storage`).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import py_trees
 
+from agent import blackboard as bb
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.planning.explore import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
@@ -38,6 +43,7 @@ from agent.runtime.world_link import WorldLink
 from agent.vlm.protocol import VisionLanguageModel
 from agent.eqa.stopping import BudgetRule, StoppingRule
 from behaviours.answer import Answer, AnswerFallback, ShouldStop
+from behaviours.approach_storage import ApproachStorage
 from behaviours.confidence import CheckConfidence, UpdatePredictionSet
 from behaviours.explore import MarkExplorationComplete, SelectFrontier
 from behaviours.integrate_map import IntegrateMap
@@ -79,8 +85,13 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     move_or_finish = py_trees.composites.Selector(
         "Move or finish", memory=False, children=[MarkExplorationComplete(), Navigate(parts.link, parts.move_timeout_s)]
     )
+    where_to: py_trees.behaviour.Behaviour = SelectFrontier(parts.explore, parts.frontier_weights, rng, timer)
+    if parts.act is not None:
+        where_to = py_trees.composites.Selector("Where to", memory=False, children=[
+            ApproachStorage(parts.act.approach, parts.explore), where_to,
+        ])
     explore: py_trees.behaviour.Behaviour = py_trees.composites.Sequence("Explore", memory=True, children=[
-        SelectFrontier(parts.explore, parts.frontier_weights, rng, timer), move_or_finish,
+        where_to, move_or_finish,
     ])
     if method_flags(parts.explore.method).use_semantic:
         directions = QueryDirections(parts.vlm, parts.explore.method, rng, parts.prompt_points,
@@ -92,7 +103,8 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     act: list[py_trees.behaviour.Behaviour] = []
     if parts.act is not None:
         look_inside = py_trees.composites.Sequence("Look inside", memory=True, children=[
-            LookInside(parts.link, parts.act), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer, "QueryVLM inside"),
+            LookInside(parts.link, parts.act),
+            QueryVLM(parts.vlm, parts.vlm_timeout_s, timer, "QueryVLM inside", view=bb.INSIDE_VIEW),
             UpdatePredictionSet(parts.stopping, "UpdatePredictionSet inside"),
         ])
         act = [py_trees.composites.Selector("Act", memory=False, children=[

@@ -9,26 +9,30 @@ stands in; pieces seen in another room are left alone), this behaviour has the r
 along a path over the robot's map, open one of its doors or drawers, take frames while it stands
 open (a door held open by its handle, looked at with the head camera, then pushed shut from the
 same grasp; a drawer let go and looked into with the wrist camera, then closed), and fold the arm
-away. The robot stays at that stand, and a frame taken inside becomes the blackboard's
-observation (`_view_for_vlm`), so the `QueryVLM` after it sees what was revealed and the next move
-starts from where the robot is. A part held back halfway is looked into all the same when it
-stands open far enough to show something (`LookInsideConfig.min_look`), and shut again before the
-robot moves on: a door left open blocks the way.
+away; then the piece's next door or drawer, up to ``max_parts``. A part held back halfway is
+looked into all the same when it stands open far enough to show something
+(`LookInsideConfig.min_look`), and shut again before the robot moves on: a door left open blocks
+the way (and one that cannot be shut ends the act).
 
-Each part is opened once per episode; a later step tries the next one. The arm takes seconds; the
-behaviour stays RUNNING meanwhile (the robot works in a thread of its own and the tree keeps
-ticking). It fails, saying why, when there is nothing to open (so the tree goes on exploring) or
-nothing could be seen inside; a robot that moved and saw nothing leaves a fresh frame from where it
-stands as the observation. Every attempt is recorded under the blackboard key ``acts`` and in the
-episode's record: what was tried, how far it opened, whether the frames went to the VLM, whether
-it was closed again, and at which stage and why it failed.
+Every compartment is shown to the VLM at once: the best view into each part opened
+(`_view_for_vlm`), side by side (`agent.vlm.mosaic`), goes on the blackboard as ``inside_view`` for
+the `QueryVLM` after this behaviour. Shown one compartment at a time, the VLM took the empty one
+behind the first door for "nothing in the cabinet". The robot stays at its last stand, and a head
+frame from there becomes the observation, so the next move starts from where the robot is.
+
+Each part is opened once per episode. The arm takes seconds; the behaviour stays RUNNING meanwhile
+(the robot works in a thread of its own and the tree keeps ticking). It fails, saying why, when
+there is nothing to open (so the tree goes on exploring) or nothing could be seen inside; a robot
+that moved and saw nothing leaves a fresh frame from where it stands as the observation. Every
+attempt on a part is recorded under the blackboard key ``acts`` and in the episode's record: what
+was tried, where the piece stands (``piece_xy``), how far it opened, whether the frames went to
+the VLM, whether it was closed again, and at which stage and why it failed.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import re
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -41,11 +45,14 @@ from py_trees.common import Access, Status
 from agent import blackboard as bb
 from agent.acsg.robot import Robot, RobotConfig
 from agent.bus.rpc import QueryFailed
+from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
 from agent.perception.geometry import GeometryError
 from agent.perception.memory import STORAGE_CATEGORIES, Instance, InstanceMemory, MemoryConfig
 from agent.planning.route import Routes, routes_from
 from agent.runtime.world_link import WorldLink
+from agent.vlm.mosaic import side_by_side
+from behaviours.approach_storage import ApproachConfig
 from skills.plan import SkillPlanError
 from skills.stand import StandConfig
 
@@ -58,19 +65,10 @@ NOT_CONTENTS = frozenset({*STORAGE_CATEGORIES, *PARTS, "handle", "floor", "wall"
 #: more than the memory's default, since storage is often first seen from metres away, where a
 #: handle's few voxels lie further off its door.
 PART_GAP_M = 0.07
-_STORAGE_WORDS = "|".join(re.escape(w) for w in sorted(STORAGE_CATEGORIES, key=len, reverse=True))
-
-
-def storage_in_question(question: str) -> str | None:
-    """The kind of storage the question asks what is in ("in the fridge", "inside the cabinet")."""
-    found = re.search(rf"\b(?:in|inside) the ({_STORAGE_WORDS})\b", question.lower())
-    return found.group(1) if found else None
-
-
-def room_in_question(question: str) -> str | None:
-    """The room the storage the question asks about stands in ("in the cabinet in the laundry room")."""
-    found = re.search(rf"\b(?:in|inside) the (?:{_STORAGE_WORDS}) in the ([a-z ]+?)\s*\?*$", question.lower().strip())
-    return found.group(1) if found else None
+#: Pieces of one kind with centres this near, in the same room, are one piece the memory holds in
+#: fragments: "the cabinet in the bathroom" says there is one, and carcasses of one piece seen from
+#: two sides lie well within this.
+SIBLING_M = 1.0
 
 
 @dataclass(frozen=True)
@@ -79,26 +77,32 @@ class LookInsideConfig:
     instance memory keeps nothing seen further than 4 m away, `MemoryConfig.max_depth_m`);
     ``skill_timeout_s``: how long one arm skill may run; ``min_look``: how far a part must stand
     open (rad for doors, m for drawers) for a frame of it to be worth the VLM's look; ``stand``:
-    where the base stands to open (`skills.stand`)."""
+    where the base stands to open (`skills.stand`); ``max_parts``: doors and drawers of one piece
+    opened in one act at most (a kitchen counter may have six); ``approach``: how the robot goes
+    to look at storage seen farther off (`behaviours.approach_storage`)."""
 
     reach_m: float = 4.0
     skill_timeout_s: float = 120.0
     min_look: dict[str, float] = field(default_factory=lambda: {"door": math.radians(15.0), "drawer": 0.05})
     stand: StandConfig = field(default_factory=StandConfig)
+    max_parts: int = 4
+    approach: ApproachConfig = field(default_factory=ApproachConfig)
 
     def __post_init__(self) -> None:
         for name in ("reach_m", "skill_timeout_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"act.{name}: {getattr(self, name)} must be positive")
+        if self.max_parts < 1:
+            raise ValueError(f"act.max_parts: {self.max_parts} must be at least 1")
         if set(self.min_look) != set(PARTS) or not all(v > 0 for v in self.min_look.values()):
             raise ValueError(f"act.min_look: {self.min_look!r} must give a positive opening for each of {PARTS}")
 
 
 @dataclass(frozen=True)
 class _Outcome:
-    views: list[Observation]  # frames taken while the part stood open, for the VLM
-    last: Observation | None  # a frame from where the robot ended, when it moved
-    record: dict[str, Any]
+    views: list[Observation]  # for each part looked into, the frame of it for the VLM
+    last: Observation | None  # a head frame from where the robot ended, when it moved
+    records: list[dict[str, Any]]  # one per part tried
 
 
 class LookInside(py_trees.behaviour.Behaviour):
@@ -112,6 +116,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.MAP, access=Access.READ)
         self.blackboard.register_key(bb.ANSWER_LOG, access=Access.READ)
         self.blackboard.register_key(bb.OBSERVATION, access=Access.WRITE)
+        self.blackboard.register_key(bb.INSIDE_VIEW, access=Access.WRITE)
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
         self.blackboard.register_key(bb.ACTS, access=Access.WRITE)
         self.memory = InstanceMemory(MemoryConfig(part_gap_m=PART_GAP_M))
@@ -134,7 +139,6 @@ class LookInside(py_trees.behaviour.Behaviour):
         if part is None:
             self._why_not = f"no unopened {kind} door or drawer seen within {self.config.reach_m:g} m"
             return
-        self.tried.add(part.id)
         routes = None
         if self.blackboard.exists(bb.MAP):  # planned here, while the map holds still
             routes = routes_from(self.blackboard.get(bb.MAP), np.asarray(observation.base_pose[:2]))
@@ -149,15 +153,19 @@ class LookInside(py_trees.behaviour.Behaviour):
             return Status.RUNNING
         outcome = self._future.result()
         if outcome.views and self.blackboard.exists(bb.ANSWER_LOG):  # the step the VLM's look inside will be
-            outcome.record["step"] = len(self.blackboard.get(bb.ANSWER_LOG)) + 1
+            step = len(self.blackboard.get(bb.ANSWER_LOG)) + 1
+            for record in outcome.records:
+                if record["looked"]:
+                    record["step"] = step
         acts = list(self.blackboard.get(bb.ACTS)) if self.blackboard.exists(bb.ACTS) else []
-        self.blackboard.set(bb.ACTS, [*acts, outcome.record])
-        self.feedback_message = outcome.record["outcome"]
-        newest = _view_for_vlm(outcome.views) if outcome.views else outcome.last
-        if newest is not None:
-            self.blackboard.set(bb.OBSERVATION, newest)
+        self.blackboard.set(bb.ACTS, [*acts, *outcome.records])
+        self.feedback_message = "; ".join(record["outcome"] for record in outcome.records)
+        if outcome.views:
+            self.blackboard.set(bb.INSIDE_VIEW, side_by_side(outcome.views))
+        if outcome.last is not None:
+            self.blackboard.set(bb.OBSERVATION, outcome.last)
             if self.blackboard.exists(bb.TRAJECTORY):
-                self.blackboard.get(bb.TRAJECTORY).append(tuple(float(v) for v in newest.base_pose))
+                self.blackboard.get(bb.TRAJECTORY).append(tuple(float(v) for v in outcome.last.base_pose))
         return Status.SUCCESS if outcome.views else Status.FAILURE
 
     def _integrate(self, observation: Observation) -> None:
@@ -170,8 +178,8 @@ class LookInside(py_trees.behaviour.Behaviour):
                 self.rooms[inst.id] = rooms[inst.hint]
 
     def _next_part(self, kind: str, room: str | None, base_pose: tuple[float, float, float]) -> Instance | None:
-        """The nearest unopened part with a handle of the nearest piece of ``kind`` within reach,
-        pieces labelled in ``room`` first and pieces labelled in another room never."""
+        """The first unopened part with a handle (`_untried_part`) of the nearest piece of ``kind``
+        within reach, pieces labelled in ``room`` first and pieces labelled in another room never."""
         here = np.asarray(base_pose[:2], dtype=float)
         pieces = []
         for piece in self.memory.with_label(kind):
@@ -180,26 +188,64 @@ class LookInside(py_trees.behaviour.Behaviour):
             if distance <= self.config.reach_m and (room is None or seen_in in (None, room)):
                 pieces.append((seen_in != room, distance, piece.id))
         for _, _, piece_id in sorted(pieces):
-            for child in self.memory.get(piece_id).children:
-                part = self.memory.get(child)
-                handled = any(self.memory.get(c).label == "handle" for c in part.children)
-                if part.label in PARTS and handled and part.id not in self.tried and not part.gone:
-                    return part
+            part = self._untried_part(piece_id)
+            if part is not None:
+                return part
         return None
 
-    def _open_and_look(self, kind: str, part: Instance, routes: Routes | None) -> _Outcome:
-        """In the worker thread: open, look, close, stow. Never raises: the record says why."""
-        began = time.monotonic()
-        unit = "opening_deg" if part.label == "door" else "opening_m"
-        record: dict[str, Any] = {"storage": kind, "part": f"{part.label} {part.id}", "opened": False, unit: 0.0,
-                                  "looked": False, "closed": None, "stage": None, "reason": ""}
+    def _untried_part(self, piece_id: int) -> Instance | None:
+        """A door or drawer with a handle seen on it, not tried yet and not gone, of the piece or of
+        a piece of its kind that the memory keeps apart from it within `SIBLING_M` and no other
+        room's label (one piece seen in fragments: a wardrobe's two doors on two carcasses)."""
+        piece = self.memory.get(piece_id)
+        room = self.rooms.get(piece.id)
+        pieces = [piece, *(other for other in self.memory.with_label(piece.label) if other.id != piece.id
+                           and float(np.linalg.norm(other.centroid[:2] - piece.centroid[:2])) <= SIBLING_M
+                           and self.rooms.get(other.id) in (None, room))]
+        for child in (child for holder in pieces for child in holder.children):
+            part = self.memory.get(child)
+            handled = any(self.memory.get(c).label == "handle" for c in part.children)
+            if part.label in PARTS and handled and part.id not in self.tried and not part.gone:
+                return part
+        return None
+
+    def _open_and_look(self, kind: str, first: Instance, routes: Routes | None) -> _Outcome:
+        """In the worker thread: each door and drawer of ``first``'s piece in turn (``first`` first,
+        then those seen since, up to ``max_parts``): open, look, close, stow. It stops at a part it
+        could not shut or stow after. Never raises: the records say why."""
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
                                              hold_open=True),
                       memory=self.memory, routes=routes)
+        piece = first.parent if first.parent is not None else first.id
+        records: list[dict[str, Any]] = []
+        views: list[Observation] = []
+        part: Instance | None = first
+        while part is not None:
+            self.tried.add(part.id)
+            part_views, record = self._open_one(robot, kind, part, piece, look_first=not records)
+            records.append(record)
+            if part_views:
+                views.append(_view_for_vlm(part_views))
+            if record["closed"] is False or record["stage"] in ("look", "stow") or len(records) >= self.config.max_parts:
+                break
+            part = self._untried_part(piece)
+        return _Outcome(views, _head_frame(robot) if _moved(robot) else None, records)
+
+    def _open_one(self, robot: Robot, kind: str, part: Instance, piece: int,
+                  look_first: bool) -> tuple[list[Observation], dict[str, Any]]:
+        """Open one part, look, close, stow (first a look from where the robot stands, for the
+        first part of an act): the frames to show the VLM and the act's record."""
+        began = time.monotonic()
+        unit = "opening_deg" if part.label == "door" else "opening_m"
+        centre = self.memory.get(piece).centroid[:2]
+        record: dict[str, Any] = {"storage": kind, "part": f"{part.label} {part.id}",
+                                  "piece_xy": [round(float(v), 2) for v in centre], "opened": False, unit: 0.0,
+                                  "looked": False, "closed": None, "stage": None, "reason": ""}
         views: list[Observation] = []
         stage = "look"
         try:
-            robot.observe()
+            if look_first:
+                robot.observe()
             stage = "open"
             opened = robot.open_part(part)
             amount = robot.opening(part)
@@ -226,7 +272,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         record["looked"] = bool(views)
         record["outcome"] = _outcome_text(kind, part.label, record)
         record["seconds"] = round(time.monotonic() - began, 1)
-        return _Outcome(views, None if views or not _moved(robot) else _head_frame(robot), record)
+        return views, record
 
 
 def _view_for_vlm(views: list[Observation]) -> Observation:

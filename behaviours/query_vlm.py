@@ -1,4 +1,5 @@
-"""QueryVLM: ask the VLM for f̂ (the answer distribution) and Rel (its confidence) on the newest frame."""
+"""QueryVLM: ask the VLM for f̂ (the answer distribution) and Rel (its confidence) on the newest frame
+(or, after the act branch opened storage, on what it saw inside: ``view=bb.INSIDE_VIEW``)."""
 
 from __future__ import annotations
 
@@ -16,15 +17,16 @@ from worlds.vocabulary import LETTERS
 
 class QueryVLM(VLMQuery):
     def __init__(self, vlm: VisionLanguageModel, timeout_s: float = 30.0,
-                 timer: StageTimer | None = None, name: str = "QueryVLM") -> None:
+                 timer: StageTimer | None = None, name: str = "QueryVLM", view: str = bb.OBSERVATION) -> None:
         super().__init__(name, vlm, timeout_s, timer)
+        self.view = view
         self.blackboard = self.attach_blackboard_client(name=name)
-        for key in (bb.QUESTION, bb.CHOICES, bb.OBSERVATION):
+        for key in (bb.QUESTION, bb.CHOICES, view):
             self.blackboard.register_key(key, access=Access.READ)
         self.blackboard.register_key(bb.ANSWER_LOG, access=Access.WRITE)
 
     def inputs(self) -> tuple[Observation, str, list[str]]:
-        return (self.blackboard.get(bb.OBSERVATION), self.blackboard.get(bb.QUESTION), self.blackboard.get(bb.CHOICES))
+        return (self.blackboard.get(self.view), self.blackboard.get(bb.QUESTION), self.blackboard.get(bb.CHOICES))
 
     def ask(self, observation: Observation, question: str, choices: list[str]) -> tuple[dict[str, float], float]:
         answer = self.vlm.probabilities(VisualQuery(observation, answer_prompt(question, choices), LETTERS))

@@ -69,3 +69,12 @@ def test_the_summary_is_printed_from_a_results_file(tmp_path: Path, capsys: pyte
     out = capsys.readouterr().out
     assert "episodes answered right        2/3 (67 %) at the full budget, 1/3 (33 %) stopped by the stopping rule" in out
     assert main(["eval", "acts", str(tmp_path / "missing.jsonl")]) == 2
+
+
+def test_the_parts_of_one_piece_opened_in_one_act_count_as_one_view_inside() -> None:
+    both_doors = {"id": "e", "variant": "semantic", "status": "answered", "answer": "A", "ground_truth": "A",
+                  "budget": 2, "step_scores": [_step(1, "B", 0.3), _step(2, "A", 0.9)],
+                  "acts": [{**_act(True, True), "step": 2}, {**_act(True, True), "part": "door 9", "step": 2}]}
+    summary = summarise([both_doors])
+    assert (summary.acts, summary.looked) == (2, 2)
+    assert (summary.inside_views, summary.inside_right) == (1, 1)

@@ -17,7 +17,8 @@ from agent import blackboard as bb
 from agent.observation import Observation
 from agent.runtime.local_world import LocalWorld, local_world
 from agent.runtime.world_link import WorldLink
-from behaviours.look_inside import LookInside, room_in_question, storage_in_question
+from agent.eqa.storage_question import room_in_question, storage_in_question
+from behaviours.look_inside import LookInside
 from worlds.facts import CLOSED_SHARE
 from worlds.home import generate_home
 from worlds.scenario import Scenario, make_scenario
@@ -49,7 +50,7 @@ def test_the_room_the_storage_stands_in(question: str, room: str | None) -> None
 @pytest.fixture
 def board() -> py_trees.blackboard.Client:
     client = py_trees.blackboard.Client(name="test")
-    for key in (bb.QUESTION, bb.OBSERVATION, bb.ACTS):
+    for key in (bb.QUESTION, bb.OBSERVATION, bb.INSIDE_VIEW, bb.ACTS):
         client.register_key(key, access=Access.WRITE)
     yield client
     py_trees.blackboard.Blackboard.clear()
@@ -101,18 +102,37 @@ def test_the_robot_opens_the_cabinet_the_question_names_and_the_view_shows_its_c
         assert "basket" not in {label.category for label in first.labels}  # hidden behind the door
         behaviour = LookInside(link)
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
-        inside = board.get(bb.OBSERVATION)
-        assert inside is not first and "basket" in {label.category for label in inside.labels}
+        assert "basket" in {label.category for label in board.get(bb.INSIDE_VIEW).labels}  # what the VLM sees
         [act] = board.get(bb.ACTS)
         assert act["storage"] == "cabinet" and act["outcome"].startswith("opened the cabinet's door")
         assert act["opened"] and act["looked"] and act["closed"] and act["stage"] is None
-        # put back as found, and the robot stands where the view it leaves says it does
+        assert np.allclose(act["piece_xy"], piece.center[:2], atol=0.3)
+        # put back as found, and the robot stands where the frame it leaves says it does
         assert _put_back(served, link, piece)
-        here = Observation.from_message(link.call("observe", {}))
-        assert np.allclose(inside.base_pose, here.base_pose, atol=0.01)
+        last, here = board.get(bb.OBSERVATION), Observation.from_message(link.call("observe", {}))
+        assert last is not first and np.allclose(last.base_pose, here.base_pose, atol=0.01)
         # the same door is not opened twice: with nothing else to open, the next tick fails and says why
         board.set(bb.OBSERVATION, first)
         assert _tick(behaviour) == Status.FAILURE and "no unopened cabinet" in behaviour.feedback_message
+
+
+@pytest.mark.slow
+def test_every_door_of_a_two_door_cabinet_is_opened_and_the_vlm_sees_both_compartments_at_once(board) -> None:
+    """Behind one door of the bathroom cabinet lies nothing, behind the other the hammer. Shown the
+    empty compartment alone, the VLM took it for "No" with confidence; both doors are now opened in
+    one act, and the VLM is shown both compartments side by side."""
+    with _before_the_storage(9, board) as (served, link, scenario, piece, first):
+        assert scenario.question == "Is there any hammer in the cabinet in the bathroom?" and scenario.answer_text == "Yes"
+        assert [part.kind for part in piece.storage.parts] == ["door", "door"]
+        behaviour = LookInside(link)
+        assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
+        acts = board.get(bb.ACTS)
+        assert len(acts) == 2 and len({act["part"] for act in acts}) == 2
+        assert all(act["opened"] and act["looked"] and act["closed"] for act in acts)
+        inside = board.get(bb.INSIDE_VIEW)
+        assert inside.rgb.shape[1] == 2 * first.rgb.shape[1]  # one view into each compartment
+        assert "hammer" in {label.category for label in inside.labels}
+        assert _put_back(served, link, piece)
 
 
 @pytest.mark.slow
@@ -126,7 +146,7 @@ def test_a_fridge_door_wider_than_the_robot_is_swung_wide_and_shut_again(board) 
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         [act] = board.get(bb.ACTS)
         assert act["opened"] and act["opening_deg"] > 60.0 and act["closed"]
-        assert "bowl" in {label.category for label in board.get(bb.OBSERVATION).labels}
+        assert "bowl" in {label.category for label in board.get(bb.INSIDE_VIEW).labels}
         assert _put_back(served, link, piece)
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from agent.eqa.prompts import YES_NO, answer_prompt, gsv_prompt, lsv_prompt
+from agent.eqa.prompts import YES_NO, answer_prompt, gsv_prompt, lsv_prompt, relevance_prompt
 from agent.mapping.camera import Intrinsics
 from agent.observation import InstanceLabel, Observation
+from agent.vlm import commonsense
 from agent.vlm.protocol import VisualQuery
 from agent.vlm.sim import SimParams, SimulatedVLM
 from worlds.vocabulary import LETTERS, PAD_CHOICE
@@ -96,3 +99,44 @@ def test_gsv_is_higher_for_views_of_likely_rooms() -> None:
         return probs["Yes"]
 
     assert np.mean([gsv("kitchen", i) for i in range(30)]) > np.mean([gsv("garage", i) for i in range(30)]) + 0.2
+
+
+def test_for_storage_in_a_room_lsv_points_at_that_piece_and_at_what_says_which_room_it_is() -> None:
+    """Neither region shows the bathroom's floor; one shows a toilet (a bathroom, by common sense),
+    or the bathroom's cabinet itself, the other a cabinet of another room, or nothing."""
+    question = "What is inside the cabinet in the bathroom?"
+    marks = {"A": (15.0, 50.0), "B": (65.0, 50.0)}
+    toilet = InstanceLabel(40, "toilet", "white", "bathroom")
+    ours, theirs = InstanceLabel(41, "cabinet", "white", "bathroom"), InstanceLabel(42, "cabinet", "white", "kitchen")
+    for boxes in ([(toilet, (40, 8, 10, 12))], [(ours, (40, 8, 10, 12)), (theirs, (40, 58, 10, 12))]):
+        wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, boxes, ("hallway", "hallway")), question, marks)["A"]
+                   > 0.5 for s in range(20))
+        assert wins >= 17, boxes
+    # a question that is not about what is in storage is valued as before: the cabinet is no cue
+    colour = "What colour is the mug in the bathroom?"
+    wins = sum(lsv(SimulatedVLM(SimParams(seed=s)), frame(s, [(ours, (40, 8, 10, 12))], ("hallway", "hallway")),
+                   colour, marks)["A"] > 0.5 for s in range(20))
+    assert wins <= 14
+
+
+def test_the_room_a_view_shows_is_told_by_its_strongest_cue() -> None:
+    assert commonsense.room_cue(["mug", "toilet"], "bathroom") == commonsense.affinity("toilet", "bathroom") > 0.9
+    assert commonsense.room_cue(["bed"], "second bedroom") > 0.9  # the type shows, not which bedroom
+    assert commonsense.room_cue([], "bathroom") == commonsense.room_cue(["sofa"], "bathroom") == commonsense.UNLISTED
+
+
+def test_a_view_into_the_open_storage_the_question_names_gets_its_own_relevance() -> None:
+    def relevance(question: str, boxes: list, inside: tuple[float, float]) -> float:
+        params = SimParams(skill=1.0, misread=0.0, notice_area_px=10.0, relevance_inside=inside)
+        return float(np.mean([SimulatedVLM(replace(params, seed=s)).probabilities(VisualQuery(
+            frame(s, boxes), relevance_prompt(question), YES_NO))["Yes"] for s in range(30)]))
+
+    cabinet = InstanceLabel(30, "cabinet", "white", "bathroom", state="open")
+    hammer = InstanceLabel(31, "hammer", "grey", "bathroom", inside="cabinet")
+    question = "Is there any hammer in the cabinet in the bathroom?"
+    for boxes in ([(cabinet, (0, 20, 40, 40)), (hammer, (10, 30, 15, 10))], [(cabinet, (0, 20, 40, 40))]):
+        assert relevance(question, boxes, (50.0, 1.0)) > 0.9 > 0.1 > relevance(question, boxes, (1.0, 50.0))
+    closed = InstanceLabel(30, "cabinet", "white", "bathroom", state="closed")
+    assert relevance(question, [(closed, (0, 20, 40, 40))], (50.0, 1.0)) < 0.6  # nothing to see inside
+    lamp = InstanceLabel(20, "lamp", "white", "kitchen", state="on")  # evidence, but no storage asked about
+    assert relevance("Is the lamp in the kitchen on or off?", [(lamp, (5, 30, 20, 10))], (1.0, 50.0)) > 0.6

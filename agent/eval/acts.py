@@ -58,7 +58,7 @@ class ActSummary:
     episodes_acting: int = 0  # tried to open something at least once
     episodes_looked: int = 0  # the VLM saw inside at least once
     correct_looked: int = 0
-    inside_views: int = 0  # views inside scored by the VLM (their step is recorded)
+    inside_views: int = 0  # views inside scored by the VLM (their step is recorded; one per act, however many parts)
     inside_right: int = 0  # of which the VLM's best answer was the right one
     acts: int = 0
     opened: int = 0  # the skill counted the part open
@@ -80,12 +80,13 @@ class ActSummary:
         self.episodes_looked += looked
         self.correct_looked += right and looked
         scores = result.get("step_scores") or []
-        for act in acts:
-            step = act.get("step")
-            if isinstance(step, int) and 0 < step <= len(scores):
+        # Every part of a piece opened in one act is shown to the VLM in one view: count it once.
+        for step in sorted({act.get("step") for act in acts if isinstance(act.get("step"), int)}):
+            if 0 < step <= len(scores):
                 probs = scores[step - 1]["answer_probs"]
                 self.inside_views += 1
                 self.inside_right += max(probs, key=probs.get) == result.get("ground_truth")
+        for act in acts:
             self.acts += 1
             self.opened += bool(act.get("opened"))
             self.looked += bool(act.get("looked"))

@@ -94,16 +94,20 @@ class ExplorationMap:
         """Distance in metres from each cell to the nearest occupied cell."""
         return ndimage.distance_transform_edt(~self.occupied) * self.spec.resolution
 
-    def traversable(self, robot_xy: tuple[float, float], clearance: np.ndarray | None = None) -> np.ndarray:
-        """Free cells farther than the robot's radius from every occupied cell, and a way out.
+    def traversable(self, robot_xy: tuple[float, float], clearance: np.ndarray | None = None,
+                    squeeze_m: float = 0.0) -> np.ndarray:
+        """Free cells farther than the robot's radius (less ``squeeze_m``) from every occupied cell,
+        and a way out.
 
         The robot may stand closer to an obstacle than that (the world checks its true shape, and
         it may have bumped into something it never saw). Around where it stands, cells are open as
         long as they are no closer to an obstacle than the robot is now, so it can back away but
-        not push on.
+        not push on. ``squeeze_m`` lets a move try gaps that look narrower than the robot on the
+        map: its obstacles stand up to a surface band (``surface_tsdf`` of the truncation) fatter
+        than they are.
         """
         clearance = self.clearance() if clearance is None else clearance
-        radius = self.config.robot_radius
+        radius = self.config.robot_radius - squeeze_m
         row, col = self.spec.to_cell(np.asarray(robot_xy))
         inside = self.spec.inside(np.array([row, col]))
         here_clearance = float(clearance[row, col]) if inside else 0.0

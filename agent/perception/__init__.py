@@ -3,7 +3,8 @@
 Pure numpy/scipy, no simulator and no bus: frames in, instances and TCP poses out, all in the
 world frame. `memory` fuses segmented RGB-D frames into voxel instances (merge by label and
 overlap, forget by depth test, attach parts to their parents); `geometry` reads a handle and its
-front into a door or drawer and the TCP waypoints that open or close it.
+front into a door or drawer and the TCP waypoints that open or close it; `sightings` keeps where
+pieces of one kind of storage were seen, from farther than the memory looks.
 """
 
 from agent.perception.geometry import (

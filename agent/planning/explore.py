@@ -41,21 +41,24 @@ class Candidates:
 
 @dataclass(frozen=True)
 class MovePlan:
-    """One step: the waypoints to drive (world x, y), the heading at the end, and why."""
+    """One step: the waypoints to drive (world x, y), the heading at the end, and why: the frontier
+    it heads for (None for a move towards something else, a view of storage, say) and the length
+    of the whole path to its goal."""
 
     path_xy: np.ndarray
     yaw: float
-    frontier: Frontier
+    frontier: Frontier | None
     goal_distance_m: float
 
 
 def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance: np.ndarray,
-                config: ExploreConfig = ExploreConfig()) -> tuple[DistanceField, np.ndarray]:
+                config: ExploreConfig = ExploreConfig(), squeeze_m: float = 0.0) -> tuple[DistanceField, np.ndarray]:
     """Path costs from the robot over the cells it may drive (kept off walls where there is room),
-    and those cells; ``clearance`` is ``world_map.clearance()``, which callers often need too."""
+    and those cells; ``clearance`` is ``world_map.clearance()``, which callers often need too;
+    ``squeeze_m``: see `ExplorationMap.traversable`."""
     start = tuple(int(v) for v in world_map.spec.to_cell(np.asarray(robot_xy)))
     cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
-    traversable = world_map.traversable(robot_xy, clearance)
+    traversable = world_map.traversable(robot_xy, clearance, squeeze_m)
     return distance_field(world_map.spec, traversable, start, cell_cost), traversable
 
 

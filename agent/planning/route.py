@@ -6,18 +6,20 @@ robot stands, which places it can reach and by which path, over the same distanc
 exploration plans on (free cells clear of obstacles by the robot's radius, paths kept off them:
 `agent.planning.explore.drive_field`), and which places the map at least does not know to
 be blocked (their floor perhaps never seen). Built from the map while the map holds still, it may
-then be used from another thread while the tree ticks on.
+then be used from another thread while the tree ticks on. `step_towards` cuts a route to one
+step's move, for goals that take several steps to reach.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import ExploreConfig, drive_field
-from agent.planning.paths import DistanceField, simplify_path
+from agent.planning.explore import ExploreConfig, MovePlan, drive_field
+from agent.planning.paths import DistanceField, simplify_path, truncate_path
 
 #: Room kept, beyond the robot's radius, between a place to stand and the nearest obstacle on the
 #: map: clearances are measured between 10 cm cells, so a thing may stand nearer than they say.
@@ -38,6 +40,10 @@ class Routes:
         """Whether the base can drive to ``xy`` over the map and stand there clear of obstacles."""
         cell = self._cell(xy)
         return cell is not None and bool(np.isfinite(self.field.metres[cell])) and self._clear(cell)
+
+    def standable(self) -> np.ndarray:
+        """Every cell `reaches` holds for, as a boolean grid."""
+        return np.isfinite(self.field.metres) & (self.clearance >= self.robot_radius + STAND_MARGIN_M)
 
     def unblocked(self, xy: np.ndarray) -> bool:
         """Whether the map knows of no obstacle in the way of the base standing at ``xy``."""
@@ -61,9 +67,28 @@ class Routes:
         return bool(self.clearance[cell] >= self.robot_radius + STAND_MARGIN_M)
 
 
-def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: ExploreConfig = ExploreConfig()) -> Routes:
-    """The routes from ``start_xy`` over ``world_map`` as it is now."""
+def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: ExploreConfig = ExploreConfig(),
+                squeeze_m: float = 0.0) -> Routes:
+    """The routes from ``start_xy`` over ``world_map`` as it is now; with ``squeeze_m``, through gaps
+    that look that much too narrow on the map (`ExplorationMap.traversable`). Where the base may
+    stand is not squeezed."""
     start = np.asarray(start_xy, dtype=float)[:2]
     clearance = world_map.clearance()
-    field, _ = drive_field(world_map, (float(start[0]), float(start[1])), clearance, config)
+    field, _ = drive_field(world_map, (float(start[0]), float(start[1])), clearance, config, squeeze_m)
     return Routes(field, start, clearance, world_map.config.robot_radius)
+
+
+def step_towards(routes: Routes, goal_xy: np.ndarray, yaw: float | None, max_step_m: float) -> tuple[MovePlan, bool]:
+    """One step's move along the path to ``goal_xy``, cut to ``max_step_m``, and whether it ends
+    there. Arriving, the robot turns to ``yaw``; cut short (or with no ``yaw``), it faces the way
+    it was going. Raises ValueError when the goal is out of reach."""
+    full = routes.to(goal_xy)
+    path = truncate_path(full, max_step_m)
+    arrives = len(path) == len(full) and bool(np.allclose(path[-1], full[-1]))
+    if arrives and yaw is not None:
+        heading = yaw
+    else:
+        last = path[-1] - path[-2]
+        heading = math.atan2(last[1], last[0])
+    goal = tuple(int(v) for v in routes.field.spec.to_cell(np.asarray(goal_xy, dtype=float)[:2]))
+    return MovePlan(path, heading, None, float(routes.field.metres[goal])), arrives

@@ -1,11 +1,16 @@
-"""What a sensible person expects about homes: where things are usually kept.
+"""What a sensible person expects about homes: where things are usually kept, and so which room a
+view shows.
 
 The simulated VLM uses this table to value directions (LSV and GSV in Explore until Confident):
-a view into a kitchen is worth exploring for a mug, a view into a bathroom less so. Values are
-affinities in [0, 1]; a pair not listed gets `UNLISTED`.
+a view into a kitchen is worth exploring for a mug, a view into a bathroom less so. Read the other
+way, what stands in view says which room it is (`room_cue`): a toilet means a bathroom, a bed a
+bedroom, a mug a kitchen more likely than not. Values are affinities in [0, 1]; a pair not listed
+gets `UNLISTED`.
 """
 
 from __future__ import annotations
+
+from collections.abc import Iterable
 
 from worlds.vocabulary import room_kind
 
@@ -44,6 +49,19 @@ ROOM_AFFINITY: dict[str, dict[str, float]] = {
     "drawer chest": {"bedroom": 0.8, "office": 0.5},
     "cabinet": {"kitchen": 0.7, "bathroom": 0.6, "office": 0.5, "hallway": 0.4},
     "counter": {"kitchen": 0.95},
+    # furniture no question asks about, which says which room a view shows (`room_cue`)
+    "toilet": {"bathroom": 0.99},
+    "bathtub": {"bathroom": 0.99},
+    "washing machine": {"laundry room": 0.95},
+    "bed": {"bedroom": 0.99},
+    "sofa": {"living room": 0.9},
+    "coffee table": {"living room": 0.9},
+    "armchair": {"living room": 0.7, "bedroom": 0.3, "office": 0.3},
+    "desk": {"office": 0.85, "bedroom": 0.4},
+    "workbench": {"garage": 0.95},
+    "table": {"dining room": 0.7, "kitchen": 0.6},
+    "bench": {"hallway": 0.6, "garage": 0.4},
+    "shelf": {"office": 0.5, "living room": 0.5, "hallway": 0.4, "garage": 0.4},
 }
 
 #: How much a view that leads on (through a doorway, into another room) is worth by itself.
@@ -58,3 +76,10 @@ def affinity(category: str | None, room_name: str) -> float:
     if category is None:
         return UNLISTED
     return ROOM_AFFINITY.get(category, {}).get(room_kind(room_name), UNLISTED)
+
+
+def room_cue(categories: Iterable[str], room_name: str) -> float:
+    """How strongly things of these categories, seen together, suggest a room of this name's type:
+    the strongest single cue (a toilet is enough for a bathroom). `UNLISTED` with nothing in view.
+    Only the type shows: a second bedroom looks like a bedroom."""
+    return max((affinity(category, room_name) for category in categories), default=UNLISTED)

@@ -12,7 +12,8 @@ parameter, is described in docs/vlm-sim.md; in short:
 - **Answering.** Choices backed by what was noticed get ``evidence_logit``; without evidence a
   favourite choice fixed by the question text gets ``prior_logit`` (over-confidence on views that
   show nothing relevant). Gaussian ``logit_noise`` on every logit; padded choices get ``pad_logit``.
-- **Relevance.** P(Yes) drawn from Beta distributions: noisy and poorly calibrated.
+- **Relevance.** P(Yes) drawn from Beta distributions: noisy and poorly calibrated; surest on a
+  view into the very storage a question asks about, standing open.
 - **Directions.** LSV and GSV come from a commonsense table of where things are kept
   (`agent.vlm.commonsense`), the rooms visible around each drawn letter, whether the view leads on
   through a doorway, and noticed evidence.
@@ -37,6 +38,8 @@ from worlds.questions import ParsedQuestion, parse_question
 from worlds.vocabulary import COLOURS, OBJECTS, PAD_CHOICE, room_names
 
 _MISREAD_WORDS = {"colour": tuple(COLOURS), "category": tuple(OBJECTS), "room": room_names()}
+#: Pixels an instance must fill in a region for the direction values to count it as seen there.
+_SEEN_PX = 20
 
 
 @dataclass(frozen=True)
@@ -55,6 +58,7 @@ class SimParams:
     pad_logit: float = -6.0
     room_view_fraction: float = 0.12
     relevance_evidence: tuple[float, float] = (8.0, 2.0)
+    relevance_inside: tuple[float, float] = (16.0, 1.5)
     relevance_room: tuple[float, float] = (3.0, 4.0)
     relevance_none: tuple[float, float] = (1.5, 4.0)
     direction_gain: float = 4.0
@@ -132,7 +136,8 @@ class SimulatedVLM:
                    parsed: ParsedQuestion | None) -> dict[str, float]:
         p = self.params
         if parsed and self._evidence(query.observation, parsed, self._generator(query, question)):
-            shape = p.relevance_evidence
+            inside = parsed.template.hidden and _storage_open(_sightings(query.observation), parsed)
+            shape = p.relevance_inside if inside else p.relevance_evidence
         elif parsed and parsed.room and _room_fraction(query.observation, parsed.room) >= p.room_view_fraction:
             shape = p.relevance_room
         else:
@@ -174,8 +179,7 @@ class SimulatedVLM:
         """Whether the frame shows where the thing would be, without it: the room, or the open storage."""
         if question.container is None:
             return room_in_view
-        return any(s.label.category == question.container and s.label.room == question.room
-                   and s.label.state == "open" for s in sightings)
+        return _storage_open(sightings, question)
 
     def _noticed(self, sightings: list[_Sighting], rng: np.random.Generator) -> list[_Sighting]:
         p = self.params
@@ -219,8 +223,10 @@ class SimulatedVLM:
         ids, counts = np.unique(seg[seg >= 0], return_counts=True)
         if ids.size == 0:
             return 0.0
-        target = _target_category(question)
+        storage = question is not None and question.template.hidden
+        target = None if storage else _target_category(question)  # what is in storage is not in view
         rooms: dict[str, int] = {}
+        seen: list[InstanceLabel] = []
         value = 0.0
         for instance, count in zip(ids.tolist(), counts.tolist()):
             label = labels.get(instance)
@@ -228,8 +234,14 @@ class SimulatedVLM:
                 continue
             if label.category == "floor":
                 rooms[label.room] = rooms.get(label.room, 0) + count
-            if target is not None and label.category == target and count >= 20:
+            elif count >= _SEEN_PX:
+                seen.append(label)
+            if target is not None and label.category == target and count >= _SEEN_PX:
                 value = 1.0  # the thing itself is right there
+        if storage:
+            # What is in a closed piece of storage is seen by going to the piece: the piece in the
+            # named room is the thing to go to, and what stands in view tells which room it is.
+            value = max(value, _storage_value(seen, question))
         if rooms:
             if question is not None and question.room is not None:
                 # The question names the room: that room is where to go, whatever usually lives where.
@@ -241,6 +253,24 @@ class SimulatedVLM:
             if any(room != here for room in rooms):
                 value = max(value, commonsense.DOORWAY_VALUE + 0.5 * value)
         return float(min(1.0, value))
+
+
+def _storage_open(sightings: list[_Sighting], question: ParsedQuestion) -> bool:
+    """Whether the frame shows the storage the question names (its kind, in its room) standing open."""
+    return any(s.label.category == question.container and s.label.room == question.room
+               and s.label.state == "open" for s in sightings)
+
+
+def _storage_value(seen: list[InstanceLabel], question: ParsedQuestion) -> float:
+    """For a question about what is in a piece of storage in a room: 1 when such a piece standing
+    in that room is in view; else how strongly the things in view suggest that room (a toilet a
+    bathroom, `commonsense.room_cue`), scaled to `commonsense.NAMED_ROOM_VALUE`."""
+    if any(label.category == question.container and question.room in (None, label.room) for label in seen):
+        return 1.0
+    if question.room is None:
+        return 0.0
+    cues = [label.category for label in seen if label.category != question.container]
+    return commonsense.NAMED_ROOM_VALUE * commonsense.room_cue(cues, question.room)
 
 
 def _target_category(question: ParsedQuestion | None) -> str | None:

@@ -1,0 +1,76 @@
+"""Where the room a question names was seen, and the place to go to step into it.
+
+"What is inside the cabinet in the laundry room?": until the cabinet itself is seen, the laundry
+room is where to go. Its floor is often glimpsed early, through a doorway from the hall, and then
+left behind: the semantic values make frontiers towards it likely, not certain, and a frontier
+drawn anew each step may lead elsewhere the next. `RoomFloor` keeps every floor cell of the map
+seen labelled with that room (the world names each floor's room with its label, as it does for
+every instance: docs/interactive.md, "What the robot may know"); `room_entry` picks the place to
+drive to: a cell of that floor the base can reach, the one nearest the middle of what was seen of
+it, else the reachable cell nearest to that floor (the near side of the doorway it was seen
+through). Pure: plain arrays and the map's grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from agent.mapping.camera import back_project
+from agent.mapping.grid import GridSpec
+from agent.observation import Observation
+from agent.planning.route import Routes
+
+#: Every this many rows and columns of a frame's floor pixels are back-projected (a 10 cm cell
+#: spans several pixels at any distance that matters).
+_PIXEL_STRIDE = 2
+
+
+def room_floor_points(observation: Observation, room: str, max_depth_m: float) -> np.ndarray:
+    """Floor points (N, 2) of the frame's floor instances labelled ``room``, up to ``max_depth_m`` away."""
+    floors = [label.id for label in observation.labels if label.category == "floor" and label.room == room]
+    if not floors:
+        return np.zeros((0, 2))
+    mask = np.zeros(observation.segmentation.shape, dtype=bool)
+    mask[::_PIXEL_STRIDE, ::_PIXEL_STRIDE] = True
+    mask &= np.isin(observation.segmentation, floors) & (observation.depth > 0) & (observation.depth <= max_depth_m)
+    return back_project(observation.depth, observation.intrinsics, observation.camera_to_world, mask)[:, :2]
+
+
+class RoomFloor:
+    """The cells of a grid on which the named room's floor has been seen."""
+
+    def __init__(self, spec: GridSpec) -> None:
+        self.spec = spec
+        self.seen = np.zeros(spec.shape, dtype=bool)
+
+    def add(self, points_xy: np.ndarray) -> None:
+        cells = self.spec.to_cell(np.asarray(points_xy, dtype=float).reshape(-1, 2))
+        cells = cells[self.spec.inside(cells)]
+        self.seen[cells[:, 0], cells[:, 1]] = True
+
+    def contains(self, xy: np.ndarray, within_m: float) -> bool:
+        """Whether a seen cell lies within ``within_m`` of ``xy``."""
+        return bool((self.seen & self.spec.disc(tuple(np.asarray(xy, dtype=float)[:2]), within_m)).any())
+
+
+def room_entry(routes: Routes, floor: RoomFloor) -> np.ndarray | None:
+    """Where to drive to step into the room (world x, y): of the seen floor cells the base can reach
+    and stand on, the one nearest the mean of all seen; with none, the reachable cell nearest to a
+    seen one. None when nothing was seen or nothing is reachable."""
+    if not floor.seen.any():
+        return None
+    spec = floor.spec
+    standable = routes.standable()
+    inside = floor.seen & standable
+    if inside.any():
+        middle = spec.to_world(np.argwhere(floor.seen)).mean(axis=0)
+        cells = np.argwhere(inside)
+        best = cells[np.argmin(np.linalg.norm(spec.to_world(cells) - middle, axis=1))]
+    elif standable.any():
+        to_floor = ndimage.distance_transform_edt(~floor.seen)
+        candidates = np.where(standable, to_floor, np.inf)
+        best = np.array(np.unravel_index(np.argmin(candidates), candidates.shape))
+    else:
+        return None
+    return spec.to_world(best)

@@ -1,0 +1,185 @@
+"""ApproachStorage: go to the storage the question names once it has been seen, or else to its room.
+
+The act branch (`behaviours.look_inside`) opens storage seen within 4 m with its handles in view.
+Exploration rarely brings the robot there by itself: a cabinet seen across the bathroom from its
+doorway leaves no frontier near it, so nothing draws the robot back, and a frontier drawn anew each
+step towards the room the question names may be dropped for another the next step. This leaf,
+tried before a frontier is chosen, keeps to one goal over several steps:
+
+1. a piece of the named kind (in the named room) seen from as far as 8 m
+   (`agent.perception.sightings`): the step's move goes towards a viewpoint of the nearest one
+   not dealt with yet (`agent.planning.viewpoint`), about 1.6 m from it, in plain view, reachable
+   over the map. From there the next step's frame shows its front, and the act branch opens it.
+   A piece is dealt with once the act branch has tried to open it (an act record within
+   ``done_m`` of it), once it has been looked at from ``views`` sides, or after ``max_moves`` moves
+   towards it (a path that keeps being cut short or blocked);
+2. with no such piece, the named room, when its floor has been seen but the robot has not stood
+   on it yet (within ``entered_m``): towards the middle of what was seen of it
+   (`agent.planning.room_goal`), for at most ``max_moves`` moves. Inside, frontier exploration
+   goes on, valued towards the room by the VLM.
+
+Both kinds of move may squeeze through gaps the map draws a little narrower than the robot
+(``squeeze_m``): the doorway the room was seen through, typically. It fails, saying why, when there
+is nowhere to go, so the step explores on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import py_trees
+from py_trees.common import Access, Status
+
+from agent import blackboard as bb
+from agent.eqa.storage_question import room_in_question, storage_in_question
+from agent.mapping.occupancy import ExplorationMap
+from agent.observation import Observation
+from agent.perception.sightings import SightingConfig, Sightings, storage_centres
+from agent.planning.explore import ExploreConfig
+from agent.planning.room_goal import RoomFloor, room_entry, room_floor_points
+from agent.planning.route import Routes, routes_from, step_towards
+from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint
+
+#: More than the map's surface band, a squeeze would send the base at walls it has seen.
+MAX_SQUEEZE_M = 0.15
+
+
+@dataclass(frozen=True)
+class ApproachConfig:
+    """``views``: sides a piece is looked at from before it is given up; ``max_moves``: moves
+    towards one piece, or towards the room, at most; ``done_m``: an act record this near a piece
+    means it was tried; ``entered_m``: the robot has been in the room once it stood this near a
+    cell of its floor seen; ``squeeze_m``: these moves may pass gaps this much narrower than the
+    map allows exploration (`ExplorationMap.traversable`): a doorway the robot saw the room
+    through often looks too narrow for it on the map, whose obstacles stand up to 0.15 m fatter
+    than they are. A gap that really is too narrow stops the base on contact, and the map learns
+    of it."""
+
+    views: int = 2
+    max_moves: int = 6
+    done_m: float = 1.0
+    entered_m: float = 1.0
+    squeeze_m: float = 0.1
+    sightings: SightingConfig = field(default_factory=SightingConfig)
+    viewpoint: ViewpointConfig = field(default_factory=ViewpointConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("views", "max_moves"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"act.approach.{name}: {getattr(self, name)} must be at least 1")
+        for name in ("done_m", "entered_m"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"act.approach.{name}: {getattr(self, name)} must be positive")
+        if not 0 <= self.squeeze_m <= MAX_SQUEEZE_M:
+            raise ValueError(f"act.approach.squeeze_m: {self.squeeze_m} must lie in [0, {MAX_SQUEEZE_M}]")
+
+
+@dataclass
+class _Progress:
+    tried: list[float] = field(default_factory=list)  # bearings of the viewpoints driven to
+    moves: int = 0
+
+
+class ApproachStorage(py_trees.behaviour.Behaviour):
+    """Writes a `MovePlan` towards the named storage (a view of a piece seen, else its room) and
+    succeeds, or fails when there is nowhere to go (see the module docstring)."""
+
+    def __init__(self, config: ApproachConfig = ApproachConfig(), explore: ExploreConfig = ExploreConfig(),
+                 name: str = "ApproachStorage") -> None:
+        super().__init__(name)
+        self.config = config
+        self.explore = explore
+        self.blackboard = self.attach_blackboard_client(name=name)
+        for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ACTS):
+            self.blackboard.register_key(key, access=Access.READ)
+        self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
+        self.sightings = Sightings(config.sightings)
+        self.progress: list[_Progress] = []  # by index into self.sightings.pieces
+        self.floor: RoomFloor | None = None
+        self.room_moves = 0
+        self.entered = False
+        self._seen: Observation | None = None
+
+    def update(self) -> Status:
+        question = self.blackboard.get(bb.QUESTION)
+        kind = storage_in_question(question)
+        if kind is None:
+            self.feedback_message = "the question asks about no storage"
+            return Status.FAILURE
+        room = room_in_question(question)
+        world_map: ExplorationMap = self.blackboard.get(bb.MAP)
+        observation: Observation = self.blackboard.get(bb.OBSERVATION)
+        if observation is not self._seen:
+            self._seen = observation
+            self._note(observation, kind, room, world_map)
+        routes = routes_from(world_map, np.asarray(observation.base_pose[:2]), self.explore, self.config.squeeze_m)
+        if self._to_piece(kind, routes, world_map) or self._to_room(room, routes):
+            return Status.SUCCESS
+        return Status.FAILURE
+
+    def _note(self, observation: Observation, kind: str, room: str | None, world_map: ExplorationMap) -> None:
+        """What this frame shows of the named storage and room; whether the robot stands in the room."""
+        self.sightings.add(storage_centres(observation, kind, room, self.config.sightings))
+        self.progress += [_Progress() for _ in range(len(self.sightings.pieces) - len(self.progress))]
+        if room is None:
+            return
+        if self.floor is None:
+            self.floor = RoomFloor(world_map.spec)
+        self.floor.add(room_floor_points(observation, room, self.config.sightings.max_depth_m))
+        self.entered |= self.floor.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
+
+    def _to_piece(self, kind: str, routes: Routes, world_map: ExplorationMap) -> bool:
+        """Plan the move towards a view of the nearest piece still to be looked at; whether it did."""
+        acts = self.blackboard.get(bb.ACTS) if self.blackboard.exists(bb.ACTS) else []
+        choices = []
+        for index in range(len(self.progress)):
+            if self._dealt_with(index, acts):
+                continue
+            viewpoint = choose_viewpoint(routes, world_map.occupied, self.sightings.pieces[index].xy,
+                                         self.progress[index].tried, self.config.viewpoint)
+            if viewpoint is not None:
+                choices.append((viewpoint.path_m, index, viewpoint))
+        if not choices:
+            self.feedback_message = f"no {kind} seen that is still to be looked at and can be reached"
+            return False
+        _, index, viewpoint = min(choices, key=lambda c: c[:2])
+        plan, arrives = step_towards(routes, viewpoint.xy, viewpoint.yaw, self.explore.max_step_m)
+        progress = self.progress[index]
+        progress.moves += 1
+        if arrives:
+            progress.tried.append(viewpoint.bearing)
+        self.blackboard.set(bb.PLAN, plan)
+        x, y = self.sightings.pieces[index].xy
+        self.feedback_message = (f"towards a view of the {kind} at ({x:.1f}, {y:.1f}), "
+                                 f"{viewpoint.path_m:.1f} m away{'' if arrives else ' (part of the way)'}")
+        return True
+
+    def _to_room(self, room: str | None, routes: Routes) -> bool:
+        """Plan the move into the named room, seen but not stood in yet; whether it did."""
+        if room is None or self.floor is None:
+            return False
+        if self.entered or self.room_moves >= self.config.max_moves:
+            self.feedback_message += f"; {'has been in' if self.entered else 'gave up going into'} the {room}"
+            return False
+        goal = room_entry(routes, self.floor)
+        if goal is None:
+            self.feedback_message += f"; no way into the {room} seen yet"
+            return False
+        plan, _ = step_towards(routes, goal, None, self.explore.max_step_m)
+        if plan.goal_distance_m < self.explore.min_frontier_distance_m:
+            self.feedback_message += f"; as near the {room} as the map lets it come"
+            return False
+        self.room_moves += 1
+        self.blackboard.set(bb.PLAN, plan)
+        self.feedback_message = f"into the {room}, towards ({goal[0]:.1f}, {goal[1]:.1f}), {plan.goal_distance_m:.1f} m away"
+        return True
+
+    def _dealt_with(self, index: int, acts: list[dict[str, Any]]) -> bool:
+        progress = self.progress[index]
+        if len(progress.tried) >= self.config.views or progress.moves >= self.config.max_moves:
+            return True
+        xy = self.sightings.pieces[index].xy
+        return any("piece_xy" in act and float(np.linalg.norm(np.asarray(act["piece_xy"]) - xy)) <= self.config.done_m
+                   for act in acts)
