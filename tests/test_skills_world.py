@@ -30,7 +30,7 @@ from skills.plan import idle_spot, stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
 from worlds.storage import StoragePlacement
 from worlds.tabletop import tabletop_variant
-from worlds.tabletop_scene import TabletopScene
+from worlds.tabletop_scene import TabletopObject, TabletopScene
 from worlds.urdf import handle_boxes
 
 TIMINGS: list[str] = []
@@ -158,19 +158,26 @@ def test_a_door_is_swung_open_past_60_degrees_and_shut_again(link: WorldLink) ->
     assert _door_angle(_pixels(_observe(link), door_id)) < math.radians(3)
 
 
-def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) -> None:
-    scene = tabletop_variant("drawer-only", 6)
-    can = next(obj for obj in scene.objects if obj.category == "can" and obj.relation == "on")
+def _facing_object_on_the_table(link: WorldLink, task: str, variant: int, category: str
+                                ) -> tuple[TabletopObject, InstanceMemory, Observation, Instance, np.ndarray]:
+    """Reset to a tabletop variant, drive the base in front of its ``category`` object on the table
+    and look again: (the spec's object, the memory, the new observation, the object as perceived,
+    its pixels' mean position before any skill)."""
+    scene = tabletop_variant(task, variant)
+    thing = next(obj for obj in scene.objects if obj.category == category and obj.relation == "on")
     link.call("reset", {"seed": scene.seed, "tabletop": scene.task})
     memory = InstanceMemory()
     observation = _observe(link, memory)
-    seen = _nearest(memory.with_label("can"), np.array(can.center))  # the spec says which can
-    x, y, yaw = observation.base_pose
+    seen = _nearest(memory.with_label(category), np.array(thing.center))  # the spec says which one
+    _, y, yaw = observation.base_pose
     assert link.call("move_base", {"path": [[float(seen.centroid[0]), y]], "yaw": yaw}).meta["reached"]
     observation = _observe(link, memory)
-    start = _pixels(observation, can.instance_id).mean(axis=0)
+    start = _pixels(observation, thing.instance_id).mean(axis=0)
+    return thing, memory, observation, memory.get(seen.id), start
 
-    seen = memory.get(seen.id)
+
+def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) -> None:
+    can, memory, observation, seen, start = _facing_object_on_the_table(link, "drawer-only", 6, "can")
     top, extent = top_grasp_point(seen.points()), np.ptp(seen.points(), axis=0)
     table = memory.with_label("table")[0]
     others = [inst.points() for inst in memory.live() if inst.id != table.id]  # the can too: away from itself
@@ -232,18 +239,7 @@ def test_a_drawer_too_low_for_the_level_grasp_is_opened_from_above_and_closed(li
 
 @pytest.mark.slow
 def test_a_box_wider_than_the_gripper_is_picked_away_by_its_top_and_put_back(link: WorldLink) -> None:
-    scene = tabletop_variant("recursive", 2)
-    box = next(obj for obj in scene.objects if obj.category == "box" and obj.relation == "on")
-    link.call("reset", {"seed": scene.seed, "tabletop": scene.task})
-    memory = InstanceMemory()
-    observation = _observe(link, memory)
-    seen = _nearest(memory.with_label("box"), np.array(box.center))
-    x, y, yaw = observation.base_pose
-    assert link.call("move_base", {"path": [[float(seen.centroid[0]), y]], "yaw": yaw}).meta["reached"]
-    observation = _observe(link, memory)
-    start = _pixels(observation, box.instance_id).mean(axis=0)
-
-    seen = memory.get(seen.id)
+    box, memory, observation, seen, start = _facing_object_on_the_table(link, "recursive", 2, "box")
     top, extent = top_grasp_point(seen.points()), np.ptp(seen.points(), axis=0)
     assert min(extent[:2]) > 0.08  # wider than the gripper opens, every way
     table = memory.with_label("table")[0]
