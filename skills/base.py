@@ -231,7 +231,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         assert self._planner is not None and self._target is not None
         began = time.perf_counter()
         try:
-            self._last = _arm_state(message.meta)
+            self._last = arm_state(message.meta)
             q, tcp = self._last["q"], self._last["tcp_pose"]
             base_pose = self._planner.base_pose_from(q, tcp)
             self._plan = self.plan(self._planner, q, base_pose, self._target)
@@ -282,7 +282,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _step_done(self, message: Message) -> Status:
         try:
-            state = _arm_state(message.meta)
+            state = arm_state(message.meta)
         except ValueError as error:
             return self._fail(f"{self._doing()}: {error}")
         previous, self._last = self._last, state
@@ -391,7 +391,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _released(self, message: Message) -> Status:
         try:
-            self._last = _arm_state(message.meta)
+            self._last = arm_state(message.meta)
         except ValueError:
             pass
         return self._failed(self._failure)
@@ -412,8 +412,8 @@ class ArmSkill(py_trees.behaviour.Behaviour):
                 f"of motion, planned in {result.planning_ms:.0f} ms{grasp})")
 
 
-def _arm_state(meta: dict[str, Any]) -> dict[str, Any]:
-    """The fields of an arm reply, checked: joints, TCP pose, held, and a motion's errors and contacts."""
+def arm_state(meta: dict[str, Any]) -> dict[str, Any]:
+    """The fields of an arm reply, checked: joints, TCP pose, held, stowed, and a motion's errors and contacts."""
     try:
         q = np.asarray(meta["positions"], dtype=float)
         tcp = np.asarray(meta["tcp_pose"], dtype=float)
@@ -427,6 +427,7 @@ def _arm_state(meta: dict[str, Any]) -> dict[str, Any]:
         "tcp_pose": tcp,
         "held": held if isinstance(held, dict) else None,
         "gripper_width": float(meta.get("gripper_width", 0.0)),
+        "stowed": bool(meta.get("stowed", False)),
         "final_error": float(meta.get("final_error", 0.0)),
         "stopped_on_contact": bool(meta.get("stopped_on_contact", False)),
         "contacts": [c for c in meta.get("contacts", []) if isinstance(c, dict)],

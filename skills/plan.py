@@ -110,6 +110,10 @@ GRIPPER_OPENING_M = 0.08
 FREE_SPEED, CAREFUL_SPEED = 0.5, 0.25
 #: Wrist-camera views tried: (degrees below the horizontal, standoff m), best first.
 LOOK_VIEWS = tuple((pitch, d) for d in (0.3, 0.4, 0.25, 0.5) for pitch in (60.0, 45.0, 75.0, 90.0, 30.0))
+#: How far a free move tries raising the lift to swing the arm over a surface, least first (m).
+LIFT_RISES_M = (0.15, 0.3, 0.45)
+#: An arm within this (rad or m, any joint) of its stowed or ready pose folds without backing off first.
+FOLDED_RAD = 0.1
 
 
 class SkillPlanError(RuntimeError):
@@ -469,6 +473,27 @@ class ArmPlanner:
         builder.free_move("to the goal", joints)
         return builder.finish(skill, {"goal": joints})
 
+    def plan_stow(self, q: np.ndarray, base_pose: Sequence[float], *, surface_z: float | None = None,
+                  skill: str = "stow") -> SkillPlan:
+        """Fold the arm into the base from wherever it is. A hand out among things (left at a handle
+        or an object by a move that stopped short) first backs straight out along the gripper's axis
+        and towards the base (`_off`), as every skill ends: a fold begun at once would swing the hand
+        through what it reaches into, and stop on touching it at its first sample. Where no straight
+        way back can be planned, the arm folds from where it is."""
+        if self.stowed is None:
+            raise SkillPlanError("stow: the robot description names no stowed pose")
+        builder = _Builder(self, q, base_pose, surface_z)
+        if min(np.abs(builder.q - self.stowed).max(), np.abs(builder.q - self.ready).max()) > FOLDED_RAD:
+            pose = builder.base @ self.kin.forward(builder.q)
+            try:
+                back = self._off(builder, builder.q, pose, "the hand's way back")
+            except SkillPlanError:
+                back = None
+            if back is not None:
+                builder.move("back off", back, careful=True, tcp_target=builder.base @ self.kin.forward(back[-1]))
+        builder.free_move("to the stowed pose", self.stowed)
+        return builder.finish(skill, {"goal": self.stowed})
+
     def _part(self, q: np.ndarray, base_pose: Sequence[float], geometry: PartGeometry, start: float, end: float,
               skill: str, surface_z: float | None, hold: bool = False) -> SkillPlan:
         """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
@@ -756,8 +781,9 @@ class _Builder:
         view into a drawer retraces the way there instead of sweeping through the drawer).
 
         With a known surface the hand must stay `SURFACE_CLEARANCE_M` above it all the way; a
-        straight joint-space move that dips lower is replaced by one with the lift raised to the
-        top of its travel on the way (the arm swings over, then the lift lets it down), and if that
+        straight joint-space move that dips lower is replaced by one with the lift raised on the
+        way (the arm swings over, then the lift lets it down): by `LIFT_RISES_M` in turn, as little
+        as clears the surface (the lift is the slowest joint), and if even the top of its travel
         dips too the plan fails.
         """
         planner = self.planner
@@ -772,11 +798,13 @@ class _Builder:
         routes = [np.array([*start, *end])]
         lift = planner.lift_index
         if self.surface_z is not None and lift is not None:
-            high = planner.kin.upper[lift]
-            over = [start[-1].copy(), end[0].copy()]
-            for q in over:
-                q[lift] = high
-            routes.append(np.array([*start, *over, *end]))
+            top = planner.kin.upper[lift]
+            low_lift = max(start[-1][lift], end[0][lift])
+            for rise in (*(r for r in LIFT_RISES_M if low_lift + r < top), math.inf):
+                over = [start[-1].copy(), end[0].copy()]
+                for q in over:
+                    q[lift] = min(top, low_lift + rise)
+                routes.append(np.array([*start, *over, *end]))
         target = self.base @ planner.kin.forward(goal)
         low = math.inf
         for waypoints in routes:

@@ -11,17 +11,16 @@ from __future__ import annotations
 import numpy as np
 
 from skills.base import ArmSkill, SkillTarget
-from skills.plan import ArmPlanner, SkillPlan, SkillPlanError
+from skills.plan import ArmPlanner, SkillPlan
 
 
 class Stow(ArmSkill):
-    """Fold the arm back into the base (its stowed pose), e.g. before the robot drives on."""
+    """Fold the arm back into the base (its stowed pose), e.g. before the robot drives on.
+
+    A hand left out against something is first backed straight out (`ArmPlanner.plan_stow`)."""
 
     skill_name = "stow"
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
              target: SkillTarget) -> SkillPlan:
-        if planner.stowed is None:
-            raise SkillPlanError("stow: the robot description names no stowed pose")
-        return planner.plan_joint_move(q, base_pose, planner.stowed, surface_z=target.surface_z,
-                                       skill=self.skill_name)
+        return planner.plan_stow(q, base_pose, surface_z=target.surface_z, skill=self.skill_name)

@@ -317,3 +317,23 @@ def test_grasp_pose_of_the_geometry_is_where_the_plan_grasps(planner: ArmPlanner
     got = plan.info["grasp_pose"]
     assert got[:3, 3] == pytest.approx(expected[:3, 3], abs=1e-9)
     assert abs(got[:3, 0] @ expected[:3, 0]) > 0.999  # up to the half turn and the tilt about the bar
+
+
+def test_stowing_from_a_hand_left_out_backs_it_straight_out_first(planner: ArmPlanner) -> None:
+    out = np.array([0.0, 1.52, 0.53, -2.85, -2.49, 1.3, 0.79, -1.37])  # where opening a door left the arm
+    plan = planner.plan_stow(out, BASE, surface_z=SURFACE)
+    _check_runnable(plan, out)
+    back, fold = (step for step in plan.steps if step.kind == "move")
+    assert back.name == "back off" and not back.stop_on_contact  # it starts touching what it backs away from
+    start, backed = _tcp(planner, out), _tcp(planner, back.samples[-1])
+    assert (backed[:3, 3] - start[:3, 3]) @ start[:3, 2] <= -(APPROACH_M - 1e-3)  # back along the gripper's axis
+    assert np.allclose(fold.samples[-1], STOWED, atol=1e-6)
+    base = base_transform(BASE)
+    assert min(hand_bottom(base @ planner.kin.forward(q), base, planner.body_radius)
+               for q in fold.samples) >= SURFACE + 0.01
+    # The fold straight from there would swing the hand down onto the table: the lift rises on the
+    # way, but by less than its whole travel.
+    lift = max(q[0] for q in fold.waypoints)
+    assert 0.0 < lift < SPEC.joints[0].upper
+    # From the ready pose there is nothing to back out of.
+    assert [step.name for step in planner.plan_stow(planner.ready, BASE).steps] == ["to the stowed pose"]

@@ -71,6 +71,8 @@ SURFACE_LABELS = ("table", "counter")
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
 #: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
 SEEN_PART_M = 0.25
+#: A hand folding in from where it is may swing this far (m) out and down on the way.
+FOLD_REACH_M = 0.3
 
 
 @dataclass(frozen=True)
@@ -456,7 +458,8 @@ class Robot:
         result = skill_base.run_skill(made, self.link, target, timeout_s=self.config.skill_timeout_s)
         self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
                                  "execution_s": round(result.execution_s, 3),
-                                 "wall_s": round(time.perf_counter() - began, 3)})
+                                 "wall_s": round(time.perf_counter() - began, 3),
+                                 **({} if result.ok else {"reason": result.reason})})
         if not result.ok and skill is not Stow and (result.steps_done or result.execution_s > 0):
             self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=target.surface_z))  # out of the way
         return result
@@ -476,7 +479,13 @@ class Robot:
         return observation
 
     def _drive(self, pose: tuple[float, float, float], routes: Routes | None = None) -> None:
-        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight."""
+        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
+        An arm still out (a skill ends with the hand backed off ahead of the base, a failed one
+        wherever it stopped) is folded in first: dragged sideways with the base, it sweeps across
+        the handles and things it was just working among."""
+        arm = skill_base.arm_state(self.link.call("arm_state", {}).meta)
+        if not arm["stowed"]:
+            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=self._surface_z_near(arm["tcp_pose"][:3, 3])))
         path = [[pose[0], pose[1]]]
         here = self.pose
         if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
@@ -502,6 +511,18 @@ class Robot:
     def _surface_z(self, under: np.ndarray) -> float | None:
         surface = self._surface(under)
         return None if surface is None else _top(surface)
+
+    def _surface_z_near(self, hand: np.ndarray) -> float | None:
+        """The top of the highest table or counter below ``hand`` whose footprint comes within
+        `FOLD_REACH_M` of it: what a hand folding in from there may swing down onto, though it
+        is not over it now."""
+        tops = []
+        for inst in (inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)):
+            lo, hi = inst.bounds
+            gap = np.maximum(np.maximum(lo[:2] - hand[:2], hand[:2] - hi[:2]), 0.0)
+            if float(np.linalg.norm(gap)) <= FOLD_REACH_M and _top(inst) < hand[2]:
+                tops.append(_top(inst))
+        return max(tops, default=None)
 
 
 def _top(surface: Instance) -> float:
