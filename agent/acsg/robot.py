@@ -71,6 +71,9 @@ SURFACE_LABELS = ("table", "counter")
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
 #: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
 SEEN_PART_M = 0.25
+#: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
+#: for the handle pass up to ~20 cm beside the hand's own line.
+LANE_HALF_WIDTH_M = 0.15
 #: A hand folding in from where it is may swing this far (m) out and down on the way.
 FOLD_REACH_M = 0.3
 
@@ -393,8 +396,8 @@ class Robot:
     def _kept_clear(self) -> list[np.ndarray]:
         """Where no idle spot may be: the space every remembered door and drawer sweeps as the skills
         open it (`DEFAULT_AMOUNT`), and the lane its handle is reached along, from the robot's side
-        straight in. A thing put down there blocks the part it was moved away for, or the arm on
-        its way to it."""
+        straight in, as wide as the arm reaching along it (`LANE_HALF_WIDTH_M`). A thing put down
+        there blocks the part it was moved away for, or the arm on its way to it."""
         assert self.home is not None
         kept = []
         for handle in self.memory.with_label("handle"):
@@ -410,7 +413,10 @@ class Robot:
                 motion = part_motion(geometry, float(amount))
                 kept.append(points @ motion[:3, :3].T + motion[:3, 3])
             out = max(0.0, float((np.asarray(self.home[:2]) - geometry.handle_point[:2]) @ geometry.normal[:2]))
-            kept.append(geometry.handle_point + np.arange(0.0, out, 0.05)[:, None] * geometry.normal)
+            lane = geometry.handle_point + np.arange(0.0, out, 0.05)[:, None] * geometry.normal
+            across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
+            across /= max(float(np.linalg.norm(across)), 1e-9)
+            kept.extend(lane + offset * across for offset in np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, 0.05))
         return kept
 
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
@@ -480,12 +486,23 @@ class Robot:
 
     def _drive(self, pose: tuple[float, float, float], routes: Routes | None = None) -> None:
         """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
-        An arm still out (a skill ends with the hand backed off ahead of the base, a failed one
-        wherever it stopped) is folded in first: dragged sideways with the base, it sweeps across
-        the handles and things it was just working among."""
-        arm = skill_base.arm_state(self.link.call("arm_state", {}).meta)
-        if not arm["stowed"]:
-            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=self._surface_z_near(arm["tcp_pose"][:3, 3])))
+        The arm is left where the last skill left it (backed off ahead of the base), which the
+        world checks on the way; when it touches something, it is folded in and the base drives
+        on from where it stopped, unless a door this robot opened still stands open: a door swings
+        out towards the robot, and the folding arm would sweep through it (the drive fails then,
+        as it would have). Folding it first every time would do the same."""
+        reply = self._move_base(pose, routes)
+        if not reply.get("reached") and not any(opened.geometry.kind == "door" for opened in self.opened.values()):
+            arm = skill_base.arm_state(self.link.call("arm_state", {}).meta)
+            if not arm["stowed"]:
+                self._skill(Stow.skill_name,
+                            skill_base.SkillTarget(surface_z=self._surface_z_near(arm["tcp_pose"][:3, 3])))
+                reply = self._move_base(pose, routes)
+        if not reply.get("reached"):
+            raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
+                                 f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")
+
+    def _move_base(self, pose: tuple[float, float, float], routes: Routes | None) -> dict[str, Any]:
         path = [[pose[0], pose[1]]]
         here = self.pose
         if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
@@ -494,9 +511,7 @@ class Robot:
         reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": pose[2]}).meta
         if isinstance(reply.get("base_pose"), list):
             self.pose = tuple(float(v) for v in reply["base_pose"])  # type: ignore[assignment]
-        if not reply.get("reached"):
-            raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
-                                 f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")
+        return reply
 
     def _surface(self, under: np.ndarray) -> Instance | None:
         """The table or counter below the point ``under`` (its top lower, its footprint around it):
