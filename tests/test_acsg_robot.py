@@ -32,6 +32,26 @@ def test_what_a_drawer_hides_is_found_and_every_drawer_is_shut_again() -> None:
     assert row["success"] and row["unexplored_space"] == 0.0
 
 
+def test_things_picked_away_are_put_down_out_of_the_arm_s_way_to_the_door_they_hid() -> None:
+    # A milk carton and a jar stand before the cabinet's door. Put down beside the lane to the
+    # handle, the carton held the wrist back on its way to the handle, and the door stayed shut.
+    row = run_robot("occlusion", 3)
+    assert row["failed_actions"] == []
+    assert row["success"] and row["object_recovery"] == 1.0 and row["state_recovered"]
+
+
+def test_after_a_pick_stopped_by_a_neighbour_the_arm_backs_out_and_the_rest_is_explored() -> None:
+    # Coming down onto a bottle, a finger touches the bottle beside it. The arm, left out among
+    # the bottles, used to stop folding at once and block the base on every later drive.
+    row = run_robot("occlusion", 4)
+    [failed] = row["failed_actions"]
+    assert failed.startswith("pick_away") and "stopped on contact" in failed
+    assert row["object_recovery"] == 1.0  # the door and the drawer were still opened and looked into
+    assert row["state_recovered"]  # and shut again, the bottles where they stood
+    folds = [run for run in row["skill_times"] if run["skill"] == "stow"]
+    assert folds and all(run["ok"] for run in folds)
+
+
 def test_memory_ids_are_put_in_the_ground_truth_s_terms_by_their_last_segmentation_id() -> None:
     memory = InstanceMemory()
     graph = ACSG()
