@@ -45,8 +45,7 @@ The primitives (RoboEXP's seven, §2 of the spec):
 Free moves are joint-space; with a ``surface_z`` the hand is kept above it over the whole move
 (`_Builder.free_move`: else with the lift raised on the way, else a planning error). Beyond that
 nothing here checks collisions: the world reports contacts, and free moves and approaches stop on
-the first one. Pure helpers for callers: `stand_pose` (where the base should stand for a part) and
-`idle_spot` (a free place on a table to put an object down).
+the first one.
 
 Failures raise `SkillPlanError` naming the stage and the target: ``IK: grasp pose of drawer handle
 unreachable: ...``, ``clearance: the hand at the drawer handle (0.822 m high) would come ...``.
@@ -93,8 +92,6 @@ WITHDRAW_AHEAD_M = 0.35
 #: Cartesian step of approaches, pulls and carries (m), and of door arcs (rad).
 LINE_STEP_M = 0.01
 ARC_STEP_RAD = math.radians(1.5)
-#: How far the hand reaches from the TCP across its axis (half its span along the fingers).
-HAND_RADIUS_M = 0.11
 #: The robot's body around the base's axis (its radius and a margin): no surface reaches in there.
 BODY_RADIUS_M = 0.28
 #: How far above ``surface_z`` the hand keeps.
@@ -839,76 +836,6 @@ class _Builder:
         planning_ms = 1e3 * (time.perf_counter() - self.began)
         return SkillPlan(skill, tuple(self.steps), self.base_pose, self.start, self.q.copy(), 1e3 * self.ik_s,
                          self.ik_solves, 1e3 * self.trajectory_s, planning_ms, info)
-
-
-def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
-               door_share: float = 0.35, distance_m: float | None = None) -> tuple[float, float, float]:
-    """Where the base should stand to open or close a part, from where it stands now.
-
-    It stays as far from the part's front as it is (slid along the front, never towards it), or
-    ``distance_m`` from the handle along the front's normal when given, and turns to face the front
-    square on, with its axis opposite the handle of a drawer, or
-    ``door_share`` of the way from a door's hinge to its handle: there the door, swinging open,
-    passes beside the arm instead of through it, and the handle stays within reach.
-    """
-    x, y, _ = (float(v) for v in base_pose)
-    normal = np.array([geometry.normal[0], geometry.normal[1]], dtype=float)
-    if np.linalg.norm(normal) < 1e-6:
-        raise SkillPlanError("stand pose: the part's front normal is vertical")
-    normal /= np.linalg.norm(normal)
-    along = np.array([-normal[1], normal[0]])
-    if geometry.kind == "door" and geometry.hinge_point is not None:
-        aim = geometry.hinge_point[:2] + door_share * (geometry.handle_point[:2] - geometry.hinge_point[:2])
-    else:
-        aim = geometry.handle_point[:2]
-    here = np.array([x, y])
-    there = here + along * float((aim - here) @ along)
-    if distance_m is not None:
-        there = aim + normal * float(distance_m)
-    return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])
-
-
-def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
-              near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
-              hand_radius_m: float = HAND_RADIUS_M) -> np.ndarray:
-    """A free place on a surface to put an object of footprint ``radius`` down: RoboEXP's idle space.
-
-    ``surface_points`` (N, 3): the surface's points (a table's, from the memory); its top is their
-    99th height percentile and only points within 1.5 cm of it count. ``obstacle_points``: every
-    other thing's points, and the object's own (a spot where it stands now is no idle spot). Those
-    standing above the top (by more than 5 mm) must stay ``margin_m`` beyond the object's ``radius``
-    or the hand's reach around its TCP (``hand_radius_m``), whichever is more, away in the plane;
-    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
-    Returns (x, y, top z) of the candidate on a ``grid_m`` grid nearest to ``near`` (x, y);
-    raises SkillPlanError when there is none.
-    """
-    points = np.asarray(surface_points, dtype=float)
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 10:
-        raise SkillPlanError(f"idle spot: the surface has {len(points)} points, too few to place anything on")
-    top = float(np.percentile(points[:, 2], 99))
-    flat = points[points[:, 2] >= top - 0.015, :2]
-    keep = radius + margin_m
-    clear = max(radius, hand_radius_m) + margin_m
-    lo, hi = flat.min(axis=0) + keep, flat.max(axis=0) - keep
-    if np.any(lo > hi):
-        size = np.round(flat.max(axis=0) - flat.min(axis=0), 2).tolist()
-        raise SkillPlanError(f"idle spot: the surface's top ({size} m) is too small for a {2 * radius:.2f} m object")
-    xs, ys = np.arange(lo[0], hi[0] + 1e-9, grid_m), np.arange(lo[1], hi[1] + 1e-9, grid_m)
-    candidates = np.array([(x, y) for x in xs for y in ys])
-    from scipy.spatial import cKDTree
-
-    on_top, _ = cKDTree(flat).query(candidates, distance_upper_bound=grid_m)
-    candidates = candidates[np.isfinite(on_top)]
-    standing = [np.asarray(o, dtype=float) for o in obstacle_points if len(o)]
-    standing = [o[o[:, 2] > top + 0.005, :2] for o in standing]
-    standing = [o for o in standing if len(o)]
-    if standing and len(candidates):
-        gap, _ = cKDTree(np.vstack(standing)).query(candidates)
-        candidates = candidates[gap >= clear]
-    if not len(candidates):
-        raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m")
-    best = candidates[int(np.argmin(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1)))]
-    return np.array([best[0], best[1], top])
 
 
 def _check_amount(geometry: PartGeometry, amount: float) -> None:

@@ -185,3 +185,30 @@ def _horizontal(vector: np.ndarray, what: str) -> np.ndarray:
     if np.linalg.norm(flat) < 1e-6:
         raise SkillPlanError(f"stand: {what} is vertical")
     return flat / np.linalg.norm(flat)
+
+
+def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
+               door_share: float = 0.35, distance_m: float | None = None) -> tuple[float, float, float]:
+    """Where the base should stand to open or close a part, from where it stands now.
+
+    It stays as far from the part's front as it is (slid along the front, never towards it), or
+    ``distance_m`` from the handle along the front's normal when given, and turns to face the front
+    square on, with its axis opposite the handle of a drawer, or
+    ``door_share`` of the way from a door's hinge to its handle: there the door, swinging open,
+    passes beside the arm instead of through it, and the handle stays within reach.
+    """
+    x, y, _ = (float(v) for v in base_pose)
+    normal = np.array([geometry.normal[0], geometry.normal[1]], dtype=float)
+    if np.linalg.norm(normal) < 1e-6:
+        raise SkillPlanError("stand pose: the part's front normal is vertical")
+    normal /= np.linalg.norm(normal)
+    along = np.array([-normal[1], normal[0]])
+    if geometry.kind == "door" and geometry.hinge_point is not None:
+        aim = geometry.hinge_point[:2] + door_share * (geometry.handle_point[:2] - geometry.hinge_point[:2])
+    else:
+        aim = geometry.handle_point[:2]
+    here = np.array([x, y])
+    there = here + along * float((aim - here) @ along)
+    if distance_m is not None:
+        there = aim + normal * float(distance_m)
+    return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])

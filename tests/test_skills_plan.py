@@ -19,9 +19,8 @@ from skills.plan import (
     Step,
     base_transform,
     hand_bottom,
-    idle_spot,
-    stand_pose,
 )
+from skills.stand import stand_pose
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig
 from worlds.robot_arm import STOWED, arm_spec, robot_description
@@ -284,21 +283,6 @@ def test_free_moves_keep_the_hand_above_the_surface(planner: ArmPlanner) -> None
         if step.kind == "move" and step.name.startswith("to "):
             lowest = min(hand_bottom(base @ planner.kin.forward(q), base, planner.body_radius) for q in step.samples)
             assert lowest >= SURFACE + 0.01
-
-
-def test_an_idle_spot_is_on_the_surface_clear_of_everything_standing_on_it() -> None:
-    xs, ys = np.meshgrid(np.arange(-0.6, 0.6, 0.01), np.arange(-0.4, 0.4, 0.01))
-    table = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.75)])
-    angles = np.linspace(0, 2 * math.pi, 40)
-    can = np.column_stack([0.1 + 0.033 * np.cos(angles), 0.033 * np.sin(angles), np.full(40, 0.8)])
-    flat_thing = np.column_stack([np.full(5, 0.3), np.linspace(-0.1, 0.1, 5), np.full(5, 0.752)])  # not standing up
-    spot = idle_spot(table, [can, flat_thing], 0.035, (0.12, 0.0))
-    assert spot[2] == pytest.approx(0.75)
-    assert np.min(np.linalg.norm(can[:, :2] - spot[:2], axis=1)) >= 0.11 + 0.03 - 1e-9  # the hand's reach
-    assert np.linalg.norm(spot[:2] - [0.12, 0.0]) < 0.2  # and otherwise as near as asked
-    assert -0.6 + 0.065 <= spot[0] <= 0.59 - 0.065 and -0.4 + 0.065 <= spot[1] <= 0.39 - 0.065
-    with pytest.raises(SkillPlanError, match="too small"):
-        idle_spot(table[np.abs(table[:, 0]) < 0.03], [], 0.035, (0.0, 0.0))
 
 
 def test_the_base_stands_square_to_the_front_opposite_the_handle_or_beside_the_hinge() -> None:

@@ -26,7 +26,8 @@ from agent.perception.geometry import PartGeometry, handle_geometry, top_grasp_p
 from agent.perception.memory import Instance, InstanceMemory
 from agent.runtime.world_link import WorldLink
 from skills.base import SkillResult, SkillTarget, run_skill
-from skills.plan import idle_spot, stand_pose
+from skills.idle_space import idle_spot
+from skills.stand import stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
 from worlds.storage import StoragePlacement
 from worlds.tabletop import tabletop_variant

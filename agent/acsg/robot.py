@@ -60,9 +60,10 @@ from agent.perception.voxels import centres
 from agent.planning.route import Routes
 from agent.runtime.world_link import WorldLink
 from skills import base as skill_base
-from skills.plan import ArmPlanner, SkillPlanError, idle_spot, stand_pose
+from skills.idle_space import idle_spot
+from skills.plan import ArmPlanner, SkillPlanError
 from skills.primitives import DEFAULT_AMOUNT, PRIMITIVES
-from skills.stand import NoStandError, StandConfig, choose_stand
+from skills.stand import NoStandError, StandConfig, choose_stand, stand_pose
 from skills.stow import Stow
 
 log = logging.getLogger(__name__)

@@ -1,0 +1,57 @@
+"""Idle space: free places on a table to put an object down while what it hid is explored (RoboEXP).
+
+Pure: the surface's and every other thing's points in, candidate spots out.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from skills.plan import SkillPlanError
+
+#: How far the hand reaches from the TCP across its axis (half its span along the fingers).
+HAND_RADIUS_M = 0.11
+
+
+def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
+              near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
+              hand_radius_m: float = HAND_RADIUS_M) -> np.ndarray:
+    """A free place on a surface to put an object of footprint ``radius`` down: RoboEXP's idle space.
+
+    ``surface_points`` (N, 3): the surface's points (a table's, from the memory); its top is their
+    99th height percentile and only points within 1.5 cm of it count. ``obstacle_points``: every
+    other thing's points, and the object's own (a spot where it stands now is no idle spot). Those
+    standing above the top (by more than 5 mm) must stay ``margin_m`` beyond the object's ``radius``
+    or the hand's reach around its TCP (``hand_radius_m``), whichever is more, away in the plane;
+    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+    Returns (x, y, top z) of the candidate on a ``grid_m`` grid nearest to ``near`` (x, y);
+    raises SkillPlanError when there is none.
+    """
+    points = np.asarray(surface_points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 10:
+        raise SkillPlanError(f"idle spot: the surface has {len(points)} points, too few to place anything on")
+    top = float(np.percentile(points[:, 2], 99))
+    flat = points[points[:, 2] >= top - 0.015, :2]
+    keep = radius + margin_m
+    clear = max(radius, hand_radius_m) + margin_m
+    lo, hi = flat.min(axis=0) + keep, flat.max(axis=0) - keep
+    if np.any(lo > hi):
+        size = np.round(flat.max(axis=0) - flat.min(axis=0), 2).tolist()
+        raise SkillPlanError(f"idle spot: the surface's top ({size} m) is too small for a {2 * radius:.2f} m object")
+    xs, ys = np.arange(lo[0], hi[0] + 1e-9, grid_m), np.arange(lo[1], hi[1] + 1e-9, grid_m)
+    candidates = np.array([(x, y) for x in xs for y in ys])
+    on_top, _ = cKDTree(flat).query(candidates, distance_upper_bound=grid_m)
+    candidates = candidates[np.isfinite(on_top)]
+    standing = [np.asarray(o, dtype=float) for o in obstacle_points if len(o)]
+    standing = [o[o[:, 2] > top + 0.005, :2] for o in standing]
+    standing = [o for o in standing if len(o)]
+    if standing and len(candidates):
+        gap, _ = cKDTree(np.vstack(standing)).query(candidates)
+        candidates = candidates[gap >= clear]
+    if not len(candidates):
+        raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m")
+    best = candidates[int(np.argmin(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1)))]
+    return np.array([best[0], best[1], top])
