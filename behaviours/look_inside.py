@@ -214,7 +214,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         then those seen since, up to ``max_parts``): open, look, close, stow. It stops at a part it
         could not shut or stow after. Never raises: the records say why."""
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
-                                             hold_open=True),
+                                             hold_open=True, scan_table_edge=False),  # storage stands on the floor
                       memory=self.memory, routes=routes)
         piece = first.parent if first.parent is not None else first.id
         records: list[dict[str, Any]] = []

@@ -5,7 +5,7 @@ Pure: the surface's and every other thing's points in, candidate spots out.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -18,7 +18,9 @@ HAND_RADIUS_M = 0.11
 
 def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
               near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
-              hand_radius_m: float = HAND_RADIUS_M) -> np.ndarray:
+              hand_radius_m: float = HAND_RADIUS_M,
+              allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed"
+              ) -> np.ndarray:
     """A free place on a surface to put an object of footprint ``radius`` down: RoboEXP's idle space.
 
     ``surface_points`` (N, 3): the surface's points (a table's, from the memory); its top is their
@@ -26,7 +28,10 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     other thing's points, and the object's own (a spot where it stands now is no idle spot). Those
     standing above the top (by more than 5 mm) must stay ``margin_m`` beyond the object's ``radius``
     or the hand's reach around its TCP (``hand_radius_m``), whichever is more, away in the plane;
-    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent. ``allowed``: which of an
+    (N, 2) array of places the caller may use (a boolean mask: within the arm's reach, say, from
+    `reach_along`: the nearest free place to ``near`` may lie at the table's far side, beyond what
+    the arm can carry to); ``allowed_means`` says what it asks, for the error when none is.
     Returns (x, y, top z) of the candidate on a ``grid_m`` grid nearest to ``near`` (x, y);
     raises SkillPlanError when there is none.
     """
@@ -51,7 +56,22 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     if standing and len(candidates):
         gap, _ = cKDTree(np.vstack(standing)).query(candidates)
         candidates = candidates[gap >= clear]
+    if allowed is not None and len(candidates):
+        candidates = candidates[np.asarray(allowed(candidates), dtype=bool)]
     if not len(candidates):
-        raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m")
+        within = "" if allowed is None else f" {allowed_means}"
+        raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m{within}")
     best = candidates[int(np.argmin(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1)))]
     return np.array([best[0], best[1], top])
+
+
+def reach_along(points_xy: np.ndarray, line_y: float, reach_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """For each (x, y) row of ``points_xy``: the interval [lo, hi] of x on the line y = ``line_y``
+    (the edge of a table the base slides along) from which the point lies within ``reach_m`` of
+    the base's axis; lo > hi where there is none. A pick and its put-down are made from one stand:
+    one where both intervals meet."""
+    points = np.atleast_2d(np.asarray(points_xy, dtype=float))
+    across = reach_m ** 2 - (points[:, 1] - line_y) ** 2
+    half = np.sqrt(np.clip(across, 0.0, None))
+    lo, hi = points[:, 0] - half, points[:, 0] + half
+    return np.where(across >= 0, lo, np.inf), np.where(across >= 0, hi, -np.inf)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from skills.idle_space import idle_spot
+from skills.idle_space import idle_spot, reach_along
 from skills.plan import SkillPlanError
 
 
@@ -29,3 +29,24 @@ def test_an_idle_spot_is_on_the_surface_clear_of_everything_standing_on_it() -> 
     with pytest.raises(SkillPlanError, match="too small"):
         idle_spot(table[np.abs(table[:, 0]) < 0.03], [], 0.035, (0.0, 0.0))
 
+
+
+def test_a_spot_beyond_the_arm_s_reach_is_not_offered() -> None:
+    table = _table()
+    base = np.array([0.0, -0.9])  # the robot at the table's near edge (y = -0.4)
+
+    def within(places: np.ndarray, distance: float) -> np.ndarray:
+        return np.linalg.norm(places - base, axis=1) <= distance
+
+    spot = idle_spot(table, [], 0.035, (0.5, 0.3), allowed=lambda places: within(places, 0.8),
+                     allowed_means="within reach")
+    assert np.linalg.norm(spot[:2] - base) <= 0.8
+    with pytest.raises(SkillPlanError, match="no free place .* within reach"):
+        idle_spot(table, [], 0.035, (0.0, 0.0), allowed=lambda places: within(places, 0.4), allowed_means="within reach")
+
+
+def test_the_stands_reaching_a_point_are_an_interval_along_the_edge() -> None:
+    lo, hi = reach_along(np.array([[0.3, -0.1], [1.0, 0.7], [0.0, -0.9]]), -0.9, 1.0)
+    assert lo[0] == pytest.approx(0.3 - 0.6) and hi[0] == pytest.approx(0.3 + 0.6)  # 0.8 m out: 0.6 either way
+    assert lo[1] > hi[1]  # 1.6 m out: no stand reaches it
+    assert (lo[2], hi[2]) == pytest.approx((-1.0, 1.0))

@@ -20,9 +20,10 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
   handle anew, or pushing it shut from the grasp it is held by; a close that fails while the part
   still stands open is tried once more, from a fresh look at how far it stands open (a door let go
   may swing on, or be held back by something, and a grasp aimed where it was misses);
-- pick away: the base level with the object, a free spot on the surface it stands on
+- pick away: a free spot on the surface it stands on
   (`idle_spot`, towards the robot, out of what the doors and drawers sweep as they open and of the
-  lanes to their handles), the grasp point on top; pick back: from where it was put down to where
+  lanes to their handles), the base slid along the table's edge to where the arm reaches both the
+  object and the spot (`PLACE_REACH_M`), level with the object where it can; pick back: from where it was put down to where
   it was.
 
 What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled out, a door swung,
@@ -60,7 +61,7 @@ from agent.perception.voxels import centres
 from agent.planning.route import Routes
 from agent.runtime.world_link import WorldLink
 from skills import base as skill_base
-from skills.idle_space import idle_spot
+from skills.idle_space import idle_spot, reach_along
 from skills.plan import ArmPlanner, SkillPlanError
 from skills.primitives import DEFAULT_AMOUNT, PRIMITIVES
 from skills.stand import NoStandError, StandConfig, choose_stand, stand_pose
@@ -75,6 +76,14 @@ SEEN_PART_M = 0.25
 #: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
 #: for the handle pass up to ~20 cm beside the hand's own line.
 LANE_HALF_WIDTH_M = 0.15
+#: The table-edge scan (`Robot.scan_table_edge`): the wrist camera's height over the top, how far
+#: apart its views are across the table, how far to either side of the base they go (m), and how
+#: near the first row the head camera sees the top must come for the scan to be needed.
+EDGE_STANDOFF_M, EDGE_STEP_M, EDGE_REACH_M, EDGE_SEEN_M = 0.4, 0.6, 0.7, 0.05
+#: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
+#: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
+#: along the table's edge to a stand from which both lie within this.
+PLACE_REACH_M = 0.8
 #: A hand folding in from where it is may swing this far (m) out and down on the way.
 FOLD_REACH_M = 0.3
 
@@ -90,9 +99,12 @@ class RobotConfig:
     a `StandConfig` drives it to a stand clear of the opening (`skills.stand`). ``hold_open``: the
     parts not looked into with the wrist camera are opened holding the handle, looked at with the
     head camera so, and pushed shut from the same grasp: let go, a door may swing on past where
-    it was pulled, and a second grasp, aimed from a look at how far it stands open, may miss."""
+    it was pulled, and a second grasp, aimed from a look at how far it stands open, may miss.
+    ``scan_table_edge``: at the first look, the wrist camera also looks along the near edge of the
+    table the robot stands at (`Robot.scan_table_edge`), below the head camera's view."""
 
     skill_timeout_s: float = 120.0
+    scan_table_edge: bool = True
     look_inside: tuple[str, ...] = ("drawer",)
     stand: StandConfig | None = None
     hold_open: bool = False
@@ -138,17 +150,58 @@ class Robot:
         self.notes: list[str] = []
         self.views: list[Observation] = []  # frames taken inside the last part opened
         self._eye = np.zeros(3)
+        self._head_sees_from = 0.0  # how far ahead of the start pose the head camera sees the table's top
 
     # ---- Perception ---------------------------------------------------------------------------
     def observe(self) -> list[Detection]:
         """Back to the start pose, one head frame into the memory; the memory's detections."""
-        if self.home is not None:
+        first = self.home is None
+        if not first:
             try:
                 self.return_home()
             except SkillPlanError as error:  # look from where it stands rather than not at all
                 self.notes.append(f"observe: {error}")
-        self._look("head")
+        head = self._look("head")
+        if first and self.config.scan_table_edge:
+            self.scan_table_edge(head)
         return memory_detections(self.memory, self._eye, vacated=self.vacated)
+
+    def scan_table_edge(self, head: Observation) -> None:
+        """Wrist-camera looks, straight down, into the strip of the table before the robot that the
+        head frame ``head`` does not show: its lowest ray meets a table top about half a metre out,
+        and a cup standing nearer than that is never seen, nor explored. Only where the table's top
+        seen runs into that strip; the looks go across its width as far as the arm reaches
+        (`EDGE_REACH_M`), midway between the robot's body and the first row seen; a view that
+        cannot be reached is skipped, and the arm is folded away afterwards."""
+        assert self.pose is not None
+        base, yaw = np.asarray(self.pose[:2]), self.pose[2]
+        ahead, side = np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)])
+        surfaces = [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
+        if not surfaces:
+            return
+        surface = min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
+        top = _top(surface)
+        points = surface.points()
+        flat = points[points[:, 2] >= top - 0.015, :2] - base
+        forward, across = flat @ ahead, flat @ side
+        first_row = _lowest_ray_ahead(head, top, base, ahead)
+        self._head_sees_from = first_row
+        if float(forward.min()) > first_row + EDGE_SEEN_M:
+            return  # the table's edge is in view
+        out = (self.planner().body_radius + first_row) / 2
+        lo, hi = max(float(across.min()), -EDGE_REACH_M), min(float(across.max()), EDGE_REACH_M)
+        count = max(1, math.ceil((hi - lo) / EDGE_STEP_M))
+        width = (hi - lo) / count
+        looked = False
+        for offset in np.linspace(lo + width / 2, hi - width / 2, count):
+            point = np.array([*(base + out * ahead + offset * side), top])
+            target = skill_base.SkillTarget(look_point=point, standoff_m=EDGE_STANDOFF_M, pitch_deg=90.0,
+                                            surface_z=top)
+            if self._skill("move_camera", target).ok:
+                self._look("wrist")
+                looked = True
+        if looked:
+            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=top))
 
     # ---- SkillExecutor ------------------------------------------------------------------------
     def execute(self, call: SkillCall) -> SkillResult:
@@ -374,15 +427,26 @@ class Robot:
             raise SkillPlanError("the robot has not looked yet")
         points = obj.points()
         top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
-        stand_x = float(top[0])
-        self._drive((stand_x, self.home[1], self.home[2]))
         surface = self._surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
         others = [inst.points() for inst in self.memory.live() if inst.id != surface.id]
         toward = np.asarray(self.home[:2]) - top[:2]
         near = top[:2] + self.config.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
-        spot = idle_spot(surface.points(), [*others, *self._kept_clear()], float(max(extent[:2])) / 2, near)
+        edge_y = self.home[1]
+        (grasp_lo,), (grasp_hi,) = reach_along(top[:2], edge_y, PLACE_REACH_M)
+        if grasp_lo > grasp_hi:  # further out than that: from level with it, straight ahead, if at all
+            grasp_lo = grasp_hi = float(top[0])
+
+        def usable(places: np.ndarray) -> np.ndarray:
+            lo, hi = reach_along(places, edge_y, PLACE_REACH_M)
+            return (np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)) & (places[:, 1] - edge_y >= self._head_sees_from)
+
+        spot = idle_spot(surface.points(), [*others, *self._kept_clear()], float(max(extent[:2])) / 2, near,
+                         allowed=usable, allowed_means="within the arm's reach and the head camera's view")
+        (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
+        stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
+        self._drive((stand_x, edge_y, self.home[2]))
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
         result = self._skill(call.primitive, skill_base.SkillTarget(
             object_point=top, object_extent=extent, place_point=place, surface_z=float(spot[2]),
@@ -396,9 +460,10 @@ class Robot:
 
     def _kept_clear(self) -> list[np.ndarray]:
         """Where no idle spot may be: the space every remembered door and drawer sweeps as the skills
-        open it (`DEFAULT_AMOUNT`), and the lane its handle is reached along, from the robot's side
-        straight in, as wide as the arm reaching along it (`LANE_HALF_WIDTH_M`). A thing put down
-        there blocks the part it was moved away for, or the arm on its way to it."""
+        open it (`DEFAULT_AMOUNT`), and the lanes its handle is reached along, shut and open (a door
+        is closed again from where it stands open), from the robot's side straight in, as wide as
+        the arm reaching along them (`LANE_HALF_WIDTH_M`). A thing put down there blocks the part
+        it was moved away for, or the arm on its way to it."""
         assert self.home is not None
         kept = []
         for handle in self.memory.with_label("handle"):
@@ -410,14 +475,16 @@ class Robot:
             except GeometryError:
                 continue
             points = part.points()
+            across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
+            across /= max(float(np.linalg.norm(across)), 1e-9)
+            offsets = np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, 0.05)
             for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], 6):
                 motion = part_motion(geometry, float(amount))
                 kept.append(points @ motion[:3, :3].T + motion[:3, 3])
-            out = max(0.0, float((np.asarray(self.home[:2]) - geometry.handle_point[:2]) @ geometry.normal[:2]))
-            lane = geometry.handle_point + np.arange(0.0, out, 0.05)[:, None] * geometry.normal
-            across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
-            across /= max(float(np.linalg.norm(across)), 1e-9)
-            kept.extend(lane + offset * across for offset in np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, 0.05))
+                handle_at = motion[:3, :3] @ geometry.handle_point + motion[:3, 3]
+                out = max(0.0, float((np.asarray(self.home[:2]) - handle_at[:2]) @ geometry.normal[:2]))
+                lane = handle_at + np.arange(0.0, out, 0.05)[:, None] * geometry.normal
+                kept.extend(lane + offset * across for offset in offsets)
         return kept
 
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
@@ -539,6 +606,18 @@ class Robot:
             if float(np.linalg.norm(gap)) <= FOLD_REACH_M and _top(inst) < hand[2]:
                 tops.append(_top(inst))
         return max(tops, default=None)
+
+
+def _lowest_ray_ahead(observation: Observation, z: float, base: np.ndarray, ahead: np.ndarray) -> float:
+    """How far ahead of ``base`` the camera's lowest central ray meets the plane at height ``z``:
+    nearer than that, nothing at that height is in its picture (inf when the ray never meets it)."""
+    k = observation.intrinsics
+    ray = observation.camera_to_world[:3, :3] @ np.array([0.0, (k.height - 1 - k.cy) / k.fy, 1.0])
+    origin = observation.camera_to_world[:3, 3]
+    if ray[2] >= -1e-9:
+        return math.inf
+    hit = origin + (z - origin[2]) / ray[2] * ray
+    return float((hit[:2] - base) @ ahead)
 
 
 def _top(surface: Instance) -> float:
