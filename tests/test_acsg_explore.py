@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
 import pytest
 
 from agent.acsg.decision import PROPOSER_USER, VERIFIER_USER, PromptDecisionModule, RuleDecisionModule
@@ -248,6 +249,30 @@ def test_rule_module_judges_by_commonsense() -> None:
     g.add_object("d", "door")
     g.add_edge("t", "d", relation="belongs")
     assert rule.propose(g.object("t"), context) == "open"  # anything with a door opens
+
+
+def test_the_rule_verifier_never_names_furniture_as_an_obstacle() -> None:
+    from agent.acsg.graph import ACSG
+    from agent.acsg.interfaces import Detection
+
+    g = ACSG()
+    for node_id, label in (("o0", "table"), ("o1", "drawer chest"), ("o2", "drawer chest"), ("o3", "drawer"),
+                           ("o4", "bottle")):
+        g.add_object(node_id, label)
+    g.add_edge("o2", "o3", relation="belongs")
+    g.add_edge("o0", "o1", relation="on")
+    g.add_edge("o0", "o2", relation="on")
+    g.add_edge("o0", "o4", relation="on")
+    opening = g.add_action("open:3", "open", "o3", "open_drawer")
+    swept = ((0.0, -0.4, 0.7), (0.4, 0.0, 0.9))
+    in_the_way = {"centroid": np.array([0.2, -0.2, 0.8]), "extent": np.array([0.1, 0.1, 0.1])}
+    visible = {
+        "o3": Detection("3", "drawer", "2", "belongs", hints={"swept": swept}),
+        # The chest seen apart from its own drawer (a second fragment), and a bottle, both in the way.
+        "o1": Detection("1", "drawer chest", "0", "on", **in_the_way),
+        "o4": Detection("4", "bottle", "0", "on", **in_the_way),
+    }
+    assert RuleDecisionModule().verify(opening, DecisionContext(g, visible)) == ["o4"]
 
 
 # ---- every ground-truth scene ----------------------------------------------------------------------

@@ -79,7 +79,8 @@ class RuleDecisionModule:
     Proposer: storage (by label, or anything with openable parts) -> "open"; covers, and vessels
     marked upside down (attribute ``upside_down``) -> "pick"; anything else -> "none".
     Verifier: only opening can be blocked; an object blocks it when its ``blocks`` hint names the
-    part, or its box overlaps the part's ``swept`` hint (lo, hi).
+    part, or its box overlaps the part's ``swept`` hint (lo, hi); storage never does, as it is not
+    picked up.
     """
 
     storage_labels: Collection[str] = STORAGE_LABELS
@@ -111,6 +112,8 @@ class RuleDecisionModule:
         swept = part.hints.get("swept") if part is not None else None
         blockers = []
         for det in surrounding_objects(action, context):
+            if det.label.lower() in self.storage_labels:
+                continue  # furniture is not lifted out of the way (a chest seen apart from its own drawers)
             named = det.hints.get("blocks", ())
             if target.id in named or (target.instance is not None and target.instance in named):
                 blockers.append(det.id)
