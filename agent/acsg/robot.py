@@ -438,12 +438,20 @@ class Robot:
         if grasp_lo > grasp_hi:  # further out than that: from level with it, straight ahead, if at all
             grasp_lo = grasp_hi = float(top[0])
 
-        def usable(places: np.ndarray) -> np.ndarray:
+        def reachable(places: np.ndarray) -> np.ndarray:
             lo, hi = reach_along(places, edge_y, PLACE_REACH_M)
-            return (np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)) & (places[:, 1] - edge_y >= self._head_sees_from)
+            return np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)
 
-        spot = idle_spot(surface.points(), [*others, *self._kept_clear()], float(max(extent[:2])) / 2, near,
-                         allowed=usable, allowed_means="within the arm's reach and the head camera's view")
+        def in_view(places: np.ndarray) -> np.ndarray:
+            return reachable(places) & (places[:, 1] - edge_y >= self._head_sees_from)
+
+        obstacles, radius = [*others, *self._kept_clear()], float(max(extent[:2])) / 2
+        try:  # where the head camera sees it, so the memory follows it; else before the robot
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=in_view,
+                             allowed_means="within the arm's reach and the head camera's view")
+        except SkillPlanError:
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+                             allowed_means="within the arm's reach")
         (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
         self._drive((stand_x, edge_y, self.home[2]))
