@@ -7,7 +7,8 @@ import pytest
 
 from agent.acsg.from_memory import memory_detections
 from agent.mapping.camera import Intrinsics
-from agent.perception.memory import InstanceMemory
+from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.voxels import keys_of
 from worlds.robot import CameraConfig
 from worlds.sim import World
 from worlds.tabletop import tabletop_variant
@@ -64,3 +65,17 @@ def test_the_bottle_in_the_door_swing_overlaps_its_swept_box_and_the_book_does_n
     assert overlaps(_one(detections, "shampoo"))
     assert not overlaps(_one(detections, "book"))
     assert "swept" in _one(detections, "drawer").hints
+
+
+def test_a_thing_seen_only_from_above_stands_on_the_surface_under_it() -> None:
+    # A can the wrist camera saw straight down: its top disc, 12 cm over the table, and no side.
+    memory = InstanceMemory()
+    xs, ys = np.meshgrid(np.arange(-0.5, 0.5, 0.01), np.arange(-0.4, 0.4, 0.01))
+    slab = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.75)])
+    angles = np.linspace(0.0, 2 * np.pi, 30)
+    disc = np.column_stack([0.2 + 0.03 * np.cos(angles), -0.3 + 0.03 * np.sin(angles), np.full(30, 0.87)])
+    for key, (label, points) in enumerate((("table", slab), ("can", disc))):
+        keys, hits = keys_of(points, memory.config.voxel_m)
+        memory.instances[key] = Instance(key, label, None, keys, hits, memory.config.voxel_m, 0, 0)
+    table, can = sorted(memory_detections(memory, np.array([0.0, -0.8, 1.5])), key=lambda d: d.label != "table")
+    assert (can.parent, can.relation) == (table.instance, "on")

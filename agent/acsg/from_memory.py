@@ -10,8 +10,10 @@ object standing in that box is found to block it. All of it is read from the rem
 - any other thing lies *inside* the smallest box that contains its centre: a storage piece's, an
   open drawer's, a box put over it, or the box a thing moved away
   filled before it was moved (``vacated``: a cup found where a box was lifted from lay inside the
-  box); else it stands *on* the highest thing whose top is just below its bottom and under its
-  centre (a piece's top counting its parts: a chest whose front is all drawers);
+  box); else it stands *on* the highest thing whose top is below its bottom (within
+  ``SUPPORT_GAP_M`` / 2 above it) and under its centre (a piece's top counting its parts: a chest
+  whose front is all drawers), however far below: a thing seen only from above, its bottom unseen,
+  does not float;
 - a drawer sweeps its front's box pulled out by ``drawer_pull_m``; a door sweeps the square in
   front of it whose side is the door's width (the quarter circle it swings through, boxed).
 """
@@ -28,7 +30,7 @@ from agent.perception.memory import Instance, InstanceMemory
 
 PARTS = ("door", "drawer")
 HANDLE = "handle"
-SUPPORT_GAP_M = 0.03  # a thing stands on a surface whose top is at most this far below its bottom
+SUPPORT_GAP_M = 0.03  # twice how far a thing's seen bottom may sink into what it stands on (voxel noise)
 INSIDE_MARGIN_M = 0.01
 
 
@@ -93,11 +95,11 @@ def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], 
         if other.id == inst.id or other.label in (HANDLE,):
             continue
         other_lo, other_hi = boxes[other.id]
-        below = 0.0 <= lo[2] - other_hi[2] + SUPPORT_GAP_M / 2 <= SUPPORT_GAP_M * 1.5
+        below = lo[2] - other_hi[2] + SUPPORT_GAP_M / 2 >= 0.0
         under = np.all(other_lo[:2] <= centre[:2]) and np.all(centre[:2] <= other_hi[:2])
         if below and under:
             supports.append(other)
-    if supports:
+    if supports:  # the highest: a thing seen only from above (its bottom unseen) still stands on it
         top = max(supports, key=lambda other: boxes[other.id][1][2])
         return (top.parent, "on") if top.label in PARTS and top.parent in by_id else (top.id, "on")
     return None, None
