@@ -22,7 +22,7 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
   may swing on, or be held back by something, and a grasp aimed where it was misses);
 - pick away: a free spot on the surface it stands on
   (`idle_spot`, towards the robot, out of what the doors and drawers sweep as they open and of the
-  lanes to their handles), the base slid along the table's edge to where the arm reaches both the
+  lanes to their handles: `agent.acsg.keep_clear`), the base slid along the table's edge to where the arm reaches both the
   object and the spot (`PLACE_REACH_M`), level with the object where it can; pick back: from where it was put down to where
   it was.
 
@@ -45,7 +45,9 @@ import numpy as np
 
 from agent.acsg.from_memory import Box, memory_detections
 from agent.acsg.interfaces import Detection, SkillCall, SkillResult
+from agent.acsg.keep_clear import kept_clear
 from agent.bus.rpc import QueryFailed
+from agent.mapping.camera import nearest_seen_ahead
 from agent.observation import Observation
 from agent.perception.frames import detect, frame_labels
 from agent.perception.geometry import (
@@ -63,7 +65,7 @@ from agent.runtime.world_link import WorldLink
 from skills import base as skill_base
 from skills.idle_space import idle_spot, reach_along
 from skills.plan import ArmPlanner, SkillPlanError
-from skills.primitives import DEFAULT_AMOUNT, PRIMITIVES
+from skills.primitives import PRIMITIVES
 from skills.stand import NoStandError, StandConfig, choose_stand, stand_pose
 from skills.stow import Stow
 
@@ -73,9 +75,6 @@ SURFACE_LABELS = ("table", "counter")
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
 #: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
 SEEN_PART_M = 0.25
-#: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
-#: for the handle pass up to ~20 cm beside the hand's own line.
-LANE_HALF_WIDTH_M = 0.15
 #: The table-edge scan (`Robot.scan_table_edge`): the wrist camera's height over the top, how far
 #: apart its views are across the table, how far to either side of the base they go (m), and how
 #: near the first row the head camera sees the top must come for the scan to be needed.
@@ -184,7 +183,7 @@ class Robot:
         points = surface.points()
         flat = points[points[:, 2] >= top - 0.015, :2] - base
         forward, across = flat @ ahead, flat @ side
-        first_row = _lowest_ray_ahead(head, top, base, ahead)
+        first_row = nearest_seen_ahead(head.intrinsics, head.camera_to_world, top, base, ahead)
         self._head_sees_from = first_row
         if float(forward.min()) > first_row + EDGE_SEEN_M:
             return  # the table's edge is in view
@@ -445,7 +444,7 @@ class Robot:
         def in_view(places: np.ndarray) -> np.ndarray:
             return reachable(places) & (places[:, 1] - edge_y >= self._head_sees_from)
 
-        obstacles, radius = [*others, *self._kept_clear()], float(max(extent[:2])) / 2
+        obstacles, radius = [*others, *kept_clear(self.memory, self._eye, self.home[:2])], float(max(extent[:2])) / 2
         try:  # where the head camera sees it, so the memory follows it; else before the robot
             spot = idle_spot(surface.points(), obstacles, radius, near, allowed=in_view,
                              allowed_means="within the arm's reach and the head camera's view")
@@ -465,35 +464,6 @@ class Robot:
         self.away[obj.id] = _Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
         return SkillResult(True)
-
-    def _kept_clear(self) -> list[np.ndarray]:
-        """Where no idle spot may be: the space every remembered door and drawer sweeps as the skills
-        open it (`DEFAULT_AMOUNT`), and the lanes its handle is reached along, shut and open (a door
-        is closed again from where it stands open), from the robot's side straight in, as wide as
-        the arm reaching along them (`LANE_HALF_WIDTH_M`). A thing put down there blocks the part
-        it was moved away for, or the arm on its way to it."""
-        assert self.home is not None
-        kept = []
-        for handle in self.memory.with_label("handle"):
-            if handle.parent is None:
-                continue
-            part = self.memory.get(handle.parent)
-            try:
-                geometry = handle_geometry(self.memory, handle.id, self._eye, kind=part.label)
-            except GeometryError:
-                continue
-            points = part.points()
-            across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
-            across /= max(float(np.linalg.norm(across)), 1e-9)
-            offsets = np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, 0.05)
-            for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], 6):
-                motion = part_motion(geometry, float(amount))
-                kept.append(points @ motion[:3, :3].T + motion[:3, 3])
-                handle_at = motion[:3, :3] @ geometry.handle_point + motion[:3, 3]
-                out = max(0.0, float((np.asarray(self.home[:2]) - handle_at[:2]) @ geometry.normal[:2]))
-                lane = handle_at + np.arange(0.0, out, 0.05)[:, None] * geometry.normal
-                kept.extend(lane + offset * across for offset in offsets)
-        return kept
 
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
         away = self._remembered(self.away, obj)
@@ -614,18 +584,6 @@ class Robot:
             if float(np.linalg.norm(gap)) <= FOLD_REACH_M and _top(inst) < hand[2]:
                 tops.append(_top(inst))
         return max(tops, default=None)
-
-
-def _lowest_ray_ahead(observation: Observation, z: float, base: np.ndarray, ahead: np.ndarray) -> float:
-    """How far ahead of ``base`` the camera's lowest central ray meets the plane at height ``z``:
-    nearer than that, nothing at that height is in its picture (inf when the ray never meets it)."""
-    k = observation.intrinsics
-    ray = observation.camera_to_world[:3, :3] @ np.array([0.0, (k.height - 1 - k.cy) / k.fy, 1.0])
-    origin = observation.camera_to_world[:3, 3]
-    if ray[2] >= -1e-9:
-        return math.inf
-    hit = origin + (z - origin[2]) / ray[2] * ray
-    return float((hit[:2] - base) @ ahead)
 
 
 def _top(surface: Instance) -> float:

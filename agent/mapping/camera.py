@@ -1,8 +1,11 @@
-"""Pinhole camera geometry shared by mapping and prompting: intrinsics, back-projection."""
+"""Pinhole camera geometry shared by mapping, prompting and acting: intrinsics, back-projection,
+where a picture begins."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import math
 
 import numpy as np
 
@@ -55,3 +58,18 @@ def narrow_view_mask(height: int, width: int) -> np.ndarray:
     mask = np.zeros((height, width), dtype=bool)
     mask[height // 2 :, width // 4 : width - width // 4] = True
     return mask
+
+
+def nearest_seen_ahead(intrinsics: Intrinsics, camera_to_world: np.ndarray, z: float, origin_xy: np.ndarray,
+                       ahead: np.ndarray) -> float:
+    """How far ahead of ``origin_xy`` (along the unit vector ``ahead``) the camera's lowest central
+    ray meets the horizontal plane at height ``z``: nearer than that, nothing at that height is in
+    its picture (inf when that ray never comes down to it). A robot's head camera misses the strip
+    of table just before it so."""
+    k = intrinsics
+    ray = camera_to_world[:3, :3] @ np.array([0.0, (k.height - 1 - k.cy) / k.fy, 1.0])
+    origin = camera_to_world[:3, 3]
+    if ray[2] >= -1e-9 or origin[2] <= z:
+        return math.inf
+    hit = origin + (z - origin[2]) / ray[2] * ray
+    return float((hit[:2] - np.asarray(origin_xy, dtype=float)[:2]) @ np.asarray(ahead, dtype=float)[:2])

@@ -1,0 +1,51 @@
+"""Where nothing may be put down on a table: what its doors and drawers sweep, and the arm's ways to them.
+
+A thing picked away and put down in a door's swing blocks the door it was moved away for; put
+down beside the lane to a handle, it holds back the wrist reaching for it. `kept_clear` gives the
+points of that space, from what the instance memory holds, for `skills.idle_space.idle_spot` to
+keep away from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from agent.perception.geometry import GeometryError, handle_geometry, part_motion
+from agent.perception.memory import InstanceMemory
+from skills.primitives import DEFAULT_AMOUNT
+
+#: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
+#: for the handle pass up to ~20 cm beside the hand's own line.
+LANE_HALF_WIDTH_M = 0.15
+#: Openings sampled along each part's travel, and the spacing of a lane's points (m).
+OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
+
+
+def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray) -> list[np.ndarray]:
+    """Point sets (each (N, 3)) of the space every remembered door and drawer with a handle sweeps as
+    the skills open it (`DEFAULT_AMOUNT`), and of the lanes its handle is reached along, shut and
+    open (a door is closed again from where it stands open): from the handle straight out of the
+    front towards the robot at ``robot_xy``, `LANE_HALF_WIDTH_M` to either side. ``eye``: where the
+    parts were seen from (it orients their fronts). A part whose geometry cannot be read is left
+    out."""
+    kept = []
+    for handle in memory.with_label("handle"):
+        if handle.parent is None:
+            continue
+        part = memory.get(handle.parent)
+        try:
+            geometry = handle_geometry(memory, handle.id, eye, kind=part.label)
+        except GeometryError:
+            continue
+        points = part.points()
+        across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
+        across /= max(float(np.linalg.norm(across)), 1e-9)
+        offsets = np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, LANE_STEP_M)
+        for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], OPENINGS_SAMPLED):
+            motion = part_motion(geometry, float(amount))
+            kept.append(points @ motion[:3, :3].T + motion[:3, 3])
+            handle_at = motion[:3, :3] @ geometry.handle_point + motion[:3, 3]
+            out = max(0.0, float((np.asarray(robot_xy, dtype=float)[:2] - handle_at[:2]) @ geometry.normal[:2]))
+            lane = handle_at + np.arange(0.0, out, LANE_STEP_M)[:, None] * geometry.normal
+            kept.extend(lane + offset * across for offset in offsets)
+    return kept
