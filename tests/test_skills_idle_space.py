@@ -42,7 +42,8 @@ def test_a_spot_beyond_the_arm_s_reach_is_not_offered() -> None:
                      allowed_means="within reach")
     assert np.linalg.norm(spot[:2] - base) <= 0.8
     with pytest.raises(SkillPlanError, match="no free place .* within reach"):
-        idle_spot(table, [], 0.035, (0.0, 0.0), allowed=lambda places: within(places, 0.4), allowed_means="within reach")
+        idle_spot(table, [], 0.035, (0.0, 0.0), allowed=lambda places: within(places, 0.4),
+                  allowed_means="within reach")
 
 
 def test_the_stands_reaching_a_point_are_an_interval_along_the_edge() -> None:

@@ -20,11 +20,12 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
   handle anew, or pushing it shut from the grasp it is held by; a close that fails while the part
   still stands open is tried once more, from a fresh look at how far it stands open (a door let go
   may swing on, or be held back by something, and a grasp aimed where it was misses);
-- pick away: a free spot on the surface it stands on
-  (`idle_spot`, towards the robot, out of what the doors and drawers sweep as they open and of the
-  lanes to their handles: `agent.acsg.keep_clear`), the base slid along the table's edge to where the arm reaches both the
-  object and the spot (`PLACE_REACH_M`), level with the object where it can; pick back: from where it was put down to where
-  it was.
+- pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
+  the doors and drawers sweep as they open and of the lanes to their handles:
+  `agent.acsg.keep_clear`), the base slid along the table's edge (the robot faces the table along
+  +y, as the tabletop scenes start it) to where the arm reaches both the object and the spot
+  (`PLACE_REACH_M`), level with the object where it can; pick back: from where it was put down to
+  where it was.
 
 What a skill moved, the memory is told (`InstanceMemory.move`): a drawer pulled out, a door swung,
 a cup put down elsewhere keep their identity, so the graph gains what was revealed and nothing
@@ -545,10 +546,12 @@ class Robot:
                             skill_base.SkillTarget(surface_z=self._surface_z_near(arm["tcp_pose"][:3, 3])))
                 reply = self._move_base(pose, routes)
         if not reply.get("reached"):
+            touched = (reply.get("contact") or {}).get("category", "something")
             raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
-                                 f"{math.degrees(pose[2]):.0f}°): it touched {(reply.get('contact') or {}).get('category', 'something')}")
+                                 f"{math.degrees(pose[2]):.0f}°): it touched {touched}")
 
     def _move_base(self, pose: tuple[float, float, float], routes: Routes | None) -> dict[str, Any]:
+        """One move_base command towards ``pose`` (see `_drive`); the world's reply."""
         path = [[pose[0], pose[1]]]
         here = self.pose
         if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
