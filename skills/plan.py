@@ -790,11 +790,11 @@ class _Builder:
         planner = self.planner
         goal = np.asarray(goal, dtype=float)
         start = [self.q]
-        stowed = planner.stowed is not None and np.abs(self.q - planner.stowed).max() < 0.1
+        stowed = planner.stowed is not None and np.abs(self.q - planner.stowed).max() < FOLDED_RAD
         if via_ready and stowed:
             start.append(planner.ready)
         end = [goal]
-        if via_ready and planner.stowed is not None and np.abs(goal - planner.stowed).max() < 0.1 and not stowed:
+        if via_ready and planner.stowed is not None and np.abs(goal - planner.stowed).max() < FOLDED_RAD and not stowed:
             end.insert(0, planner.ready)
         routes = [np.array([*start, *end])]
         lift = planner.lift_index

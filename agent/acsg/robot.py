@@ -176,7 +176,7 @@ class Robot:
         assert self.pose is not None
         base, yaw = np.asarray(self.pose[:2]), self.pose[2]
         ahead, side = np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)])
-        surfaces = [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
+        surfaces = self._surfaces()
         if not surfaces:
             return
         surface = min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
@@ -543,7 +543,7 @@ class Robot:
             arm = skill_base.arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
                 self._skill(Stow.skill_name,
-                            skill_base.SkillTarget(surface_z=self._surface_z_near(arm["tcp_pose"][:3, 3])))
+                            skill_base.SkillTarget(surface_z=self._surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)))
                 reply = self._move_base(pose, routes)
         if not reply.get("reached"):
             touched = (reply.get("contact") or {}).get("category", "something")
@@ -562,31 +562,27 @@ class Robot:
             self.pose = tuple(float(v) for v in reply["base_pose"])  # type: ignore[assignment]
         return reply
 
-    def _surface(self, under: np.ndarray) -> Instance | None:
-        """The table or counter below the point ``under`` (its top lower, its footprint around it):
-        what the hand must keep above there. None on the floor (a cabinet standing in a room)."""
+    def _surfaces(self) -> list[Instance]:
+        """Every remembered table and counter."""
+        return [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
+
+    def _surface(self, under: np.ndarray, reach_m: float = 0.0) -> Instance | None:
+        """The highest table or counter below the point ``under`` (its top lower) whose footprint
+        comes within ``reach_m`` of it: by default the one under it, what the hand must keep above
+        there; with `FOLD_REACH_M`, what a hand folding in from there may swing down onto, though it
+        is not over it now. None on the floor (a cabinet standing in a room)."""
         found = []
-        for inst in (inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)):
+        for inst in self._surfaces():
             lo, hi = inst.bounds
-            if np.all(lo[:2] <= under[:2]) and np.all(under[:2] <= hi[:2]) and _top(inst) < under[2]:
-                found.append(inst)
-        return max(found, key=_top, default=None)
+            gap = np.maximum(np.maximum(lo[:2] - under[:2], under[:2] - hi[:2]), 0.0)
+            top = _top(inst)
+            if float(np.linalg.norm(gap)) <= reach_m and top < under[2]:
+                found.append((top, inst))
+        return max(found, key=lambda pair: pair[0], default=(None, None))[1]
 
-    def _surface_z(self, under: np.ndarray) -> float | None:
-        surface = self._surface(under)
+    def _surface_z(self, under: np.ndarray, reach_m: float = 0.0) -> float | None:
+        surface = self._surface(under, reach_m)
         return None if surface is None else _top(surface)
-
-    def _surface_z_near(self, hand: np.ndarray) -> float | None:
-        """The top of the highest table or counter below ``hand`` whose footprint comes within
-        `FOLD_REACH_M` of it: what a hand folding in from there may swing down onto, though it
-        is not over it now."""
-        tops = []
-        for inst in (inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)):
-            lo, hi = inst.bounds
-            gap = np.maximum(np.maximum(lo[:2] - hand[:2], hand[:2] - hi[:2]), 0.0)
-            if float(np.linalg.norm(gap)) <= FOLD_REACH_M and _top(inst) < hand[2]:
-                tops.append(_top(inst))
-        return max(tops, default=None)
 
 
 def _top(surface: Instance) -> float:
