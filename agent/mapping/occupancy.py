@@ -1,6 +1,7 @@
 """The 2D maps the planners use, derived from the TSDF and the camera's narrow view.
 
-- occupied: a column holds a surface voxel between ``obstacle_min_z`` and the robot's height;
+- occupied: a column holds a surface voxel between ``obstacle_min_z`` and the robot's height,
+  unless the robot has driven through it;
 - floor seen: a column holds a surface voxel at floor height;
 - free: floor seen and not occupied, or near a pose the robot has stood on;
 - explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows), or
@@ -9,6 +10,10 @@
 "Near a pose" is the head camera's blind zone (``near_field_radius``): the floor closer than the
 lower edge of the image is never in view, yet the robot has just been there. Counting it as free
 and explored lets frontiers form at its edge, so a robot that starts facing a wall turns away.
+
+Surface voxels are the TSDF's zero crossings (`agent.mapping.surface`), and each voxel goes to the
+2D cell by its integer lattice index: the grid is laid so that voxel samples sit at cell centres,
+never on a cell boundary where float rounding would decide the cell.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ from scipy import ndimage
 
 from agent.mapping.camera import Intrinsics, back_project, narrow_view_mask
 from agent.mapping.grid import GridSpec
+from agent.mapping.surface import surface_voxels
 from agent.mapping.tsdf import TsdfConfig, TsdfMap, Voxels
 
 
@@ -32,15 +38,41 @@ class OccupancyConfig:
     floor_band: tuple[float, float] = (-0.12, 0.08)
     obstacle_min_z: float = 0.12
     obstacle_max_z: float = 1.6
-    surface_tsdf: float = 0.3  # |normalised TSDF| below this is a surface voxel
+    surface_tsdf: float = 0.6  # the most |normalised TSDF| the voxel nearer a zero crossing may have
     robot_radius: float = 0.25
     near_field_radius: float = 1.0  # floor the head camera cannot see around a pose it stood on
+    driven_radius: float = 0.15  # around the path the base drove, no obstacle can stand
     tsdf: TsdfConfig = field(default_factory=TsdfConfig)
+
+    def __post_init__(self) -> None:
+        voxel = self.tsdf.voxel_size
+        if not (np.isfinite(voxel) and voxel > 0):
+            raise ValueError(f"map.tsdf.voxel_size: {voxel!r} must be a positive number of metres")
+        ratio = self.resolution / voxel if np.isfinite(self.resolution) and self.resolution > 0 else 0.0
+        if ratio < 1 or abs(ratio - round(ratio)) > 1e-6:
+            raise ValueError(f"map.resolution: {self.resolution!r} must be a whole multiple (1, 2, …) of "
+                             f"map.tsdf.voxel_size ({voxel:g} m), so every voxel falls in one cell")
+        if not (np.isfinite(self.size_m) and self.resolution <= self.size_m <= 1000):
+            raise ValueError(f"map.size_m: {self.size_m!r} must be between map.resolution and 1000 m")
+
+
+def lattice_grid(centre_xy: tuple[float, float], config: OccupancyConfig) -> GridSpec:
+    """A square grid of ``config.size_m`` around ``centre_xy`` whose cell centres lie on the voxel
+    lattice: its origin is half a voxel off a lattice line, so no voxel sits on a cell boundary."""
+    voxel = config.tsdf.voxel_size
+    cells = int(np.ceil(config.size_m / config.resolution))
+    half = cells * config.resolution / 2
+    origin = tuple(float(np.round((c - half) / voxel) * voxel - voxel / 2) for c in centre_xy)
+    return GridSpec((origin[0], origin[1]), config.resolution, (cells, cells))
 
 
 def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(floor_seen, occupied) boolean grids from the observed surface voxels."""
-    surface = np.abs(voxels.tsdf) < config.surface_tsdf
+    """(floor_seen, occupied) boolean grids from the observed surface voxels.
+
+    ``spec`` must be a `lattice_grid`: cells are found from voxel indices, whose positions then lie
+    a quarter cell or more from every cell boundary.
+    """
+    surface = surface_voxels(voxels, config.surface_tsdf, 0.5 / config.tsdf.trunc_voxels)
     points = voxels.points[surface]
     cells = spec.to_cell(points[:, :2])
     inside = spec.inside(cells)
@@ -60,10 +92,11 @@ class ExplorationMap:
 
     def __init__(self, start_xy: tuple[float, float], config: OccupancyConfig = OccupancyConfig()) -> None:
         self.config = config
-        self.spec = GridSpec.centred(start_xy, config.size_m, config.resolution)
+        self.spec = lattice_grid(start_xy, config)
         self.tsdf = TsdfMap(config.tsdf)
         self.explored = np.zeros(self.spec.shape, dtype=bool)
         self.stood = np.zeros(self.spec.shape, dtype=bool)
+        self.driven = np.zeros(self.spec.shape, dtype=bool)
         self.floor_seen = np.zeros(self.spec.shape, dtype=bool)
         self.occupied = np.zeros(self.spec.shape, dtype=bool)
         self.bumped = np.zeros(self.spec.shape, dtype=bool)
@@ -73,13 +106,30 @@ class ExplorationMap:
         """Fuse one frame taken with the robot at ``robot_xy``."""
         self.tsdf.integrate(depth, intrinsics, camera_to_world)
         self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), self.config)
-        self.occupied = occupied | self.bumped
+        self.occupied = (occupied & ~self.driven) | self.bumped
         self.stood |= self.spec.disc(robot_xy, self.config.near_field_radius) & ~self.occupied
         narrow = back_project(depth, intrinsics, camera_to_world, narrow_view_mask(*depth.shape))
         cells = self.spec.to_cell(narrow[:, :2])
         cells = cells[self.spec.inside(cells)]
         self.explored[cells[:, 0], cells[:, 1]] = True
         self.explored |= self.stood
+
+    def mark_driven(self, path_xy: np.ndarray) -> None:
+        """Record the polyline (K, 2) the base drove along: no obstacle stands where the base has
+        been, so no later frame may close the gap it went through.
+
+        Args:
+            path_xy: the waypoints driven, in order, in world metres.
+        """
+        path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
+        step = self.spec.resolution / 2
+        for start, end in zip(path[:-1], path[1:]):
+            samples = max(int(np.ceil(np.hypot(*(end - start)) / step)), 1)
+            for t in np.linspace(0.0, 1.0, samples + 1):
+                self.driven |= self.spec.disc(tuple(start + t * (end - start)), self.config.driven_radius)
+        if len(path) == 1:
+            self.driven |= self.spec.disc(tuple(path[0]), self.config.driven_radius)
+        self.occupied &= ~self.driven | self.bumped
 
     def mark_contact(self, point_xy: tuple[float, float]) -> None:
         """Record an obstacle the robot touched but may never have seen (too low, too near)."""

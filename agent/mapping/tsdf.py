@@ -31,11 +31,24 @@ class TsdfConfig:
 
 @dataclass(frozen=True)
 class Voxels:
-    """Observed voxels: positions (N, 3) in metres, normalised TSDF in [-1, 1] and fusion weights."""
+    """Observed voxels: integer lattice indices (N, 3), normalised TSDF in [-1, 1], fusion weights,
+    and the voxel size.
 
-    points: np.ndarray
+    Voxel ``(i, j, k)`` is the TSDF sample at ``(i, j, k) * size`` metres. The indices are what to
+    compute with: open3d hands positions back as float32, and a position that should lie on a
+    lattice line comes out a hair to either side of it, so flooring it into a coarser grid puts
+    neighbouring voxels into one cell and leaves the next cell empty.
+    """
+
+    indices: np.ndarray
     tsdf: np.ndarray
     weight: np.ndarray
+    size: float
+
+    @property
+    def points(self) -> np.ndarray:
+        """Positions (N, 3) in metres, exact in float64."""
+        return self.indices * self.size
 
 
 class TsdfMap:
@@ -71,4 +84,5 @@ class TsdfMap:
         tsdf = self._grid.attribute("tsdf").reshape((-1,))[indices].numpy()
         weight = self._grid.attribute("weight").reshape((-1,))[indices].numpy()
         seen = weight > 0
-        return Voxels(coords.numpy()[seen], tsdf[seen], weight[seen])
+        indices = np.rint(coords.numpy()[seen] / self.config.voxel_size).astype(np.int64)
+        return Voxels(indices, tsdf[seen], weight[seen], self.config.voxel_size)
