@@ -7,6 +7,7 @@ import json
 import logging
 import sys
 from pathlib import Path
+from typing import Any
 
 from agent.bus.session import EndpointError, open_session
 from agent.config import Config, ConfigError, load_config
@@ -55,7 +56,10 @@ def _parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser("run", help="run one EQA episode against a simulated home")
     _config_options(run)
-    run.add_argument("--seed", type=int, default=0, help="home and scenario seed (default 0)")
+    run.add_argument("--seed", type=int, help="home and scenario seed (default 0)")
+    run.add_argument("--suite", type=Path, help="a suite file (homebot suite make); with --scenario, run one of its "
+                                                "scenarios in its home")
+    run.add_argument("--scenario", metavar="ID", help="the id of the suite's scenario to run, e.g. test-0007")
     run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
     run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
     run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
@@ -224,11 +228,16 @@ def _run(args: argparse.Namespace) -> int:
     from agent.runtime.run import RunError, RunRequest, run_episode
     from agent.runtime.progress import StepPrinter
 
+    try:
+        seed, scenario, what = _episode_choice(args)
+    except ValueError as error:
+        print(f"homebot run: {error}", file=sys.stderr)
+        return 2
     args.set.extend(shortcut_overrides(args))
     config = _load(args)
-    request = RunRequest(seed=args.seed, config=config, out_root=args.out, connect=args.connect,
-                         namespace=args.namespace)
-    print(f"homebot run: seed {args.seed}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
+    request = RunRequest(seed=seed, config=config, out_root=args.out, connect=args.connect,
+                         namespace=args.namespace, scenario=scenario)
+    print(f"homebot run: {what}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
           f"watch with `homebot watch --connect {config.bus.listen[0]}`", flush=True)
     try:
         result = run_episode(request, extra_sinks=[StepPrinter(sys.stdout)])
@@ -243,6 +252,26 @@ def _run(args: argparse.Namespace) -> int:
         print(f"episode failed: {result['reason']}", file=sys.stderr)
     print(f"run folder: {result['folder']}")
     return 0 if result["status"] == "answered" else 1
+
+
+def _episode_choice(args: argparse.Namespace) -> tuple[int, dict[str, Any] | None, str]:
+    """(seed, scenario or None, a few words saying which) for `homebot run`: the seed's own
+    scenario, or with ``--suite`` and ``--scenario`` that suite line's scenario and seed. Raises
+    ValueError (a SuiteError for the file) naming the option at fault."""
+    from worlds.suite import suite_entry
+
+    if (args.suite is None) != (args.scenario is None):
+        raise ValueError("--suite and --scenario go together: the suite file and the id of one of its scenarios")
+    if args.suite is None:
+        seed = 0 if args.seed is None else args.seed
+        return seed, None, f"seed {seed}"
+    if args.seed is not None:
+        raise ValueError("--seed: cannot be combined with --suite (the suite's line gives the seed)")
+    try:
+        entry = suite_entry(args.suite, args.scenario)
+    except OSError as error:
+        raise ValueError(f"--suite: {error}") from None
+    return entry["seed"], entry["scenario"], f"{args.suite} {entry['id']} (seed {entry['seed']})"
 
 
 def shortcut_overrides(args: argparse.Namespace) -> list[str]:
@@ -327,9 +356,11 @@ def _eval_explore(args: argparse.Namespace) -> int:
         return 2
     taus = report["taus"]
     marks = [i for i, tau in enumerate(taus) if round(tau, 2) in (0.25, 0.5, 0.75, 1.0)]
-    print(f"{'method':<18} {'n':>4} " + " ".join(f"{'τ=' + format(taus[i], '.2f'):>7}" for i in marks))
-    for method, curve in report["curves"].items():
-        print(f"{method:<18} {report['counts'][method]:>4} " + " ".join(f"{100 * curve[i]:>6.1f}%" for i in marks))
+    for heading, curves, counts in (("success", report["curves"], report["counts"]),
+                                    ("target seen", report["target_seen"], report["target_seen_counts"])):
+        print(f"{heading:<18} {'n':>4} " + " ".join(f"{'τ=' + format(taus[i], '.2f'):>7}" for i in marks))
+        for method, curve in curves.items():
+            print(f"  {method:<16} {counts[method]:>4} " + " ".join(f"{100 * curve[i]:>6.1f}%" for i in marks))
     print(f"{report['failed']} failed episodes; results {report['results']}; curves in {args.out}/curves.png and .csv")
     return 0
 

@@ -170,6 +170,10 @@ def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
     assert [json.loads(line)["steps"] for line in lines] == [4] * 4  # every method runs to its budget
     assert set(report["curves"]) == {"fbe", "semantic"} and report["counts"] == {"fbe": 2, "semantic": 2}
     assert (out / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert (out / "curves.csv").read_text().startswith("normalised_time,fbe (n=2),semantic (n=2)")
+    header = (out / "curves.csv").read_text().splitlines()[0]
+    assert header == "normalised_time,fbe (n=2),semantic (n=2),fbe target seen (n=2),semantic target seen (n=2)"
+    assert set(report["target_seen"]) == {"fbe", "semantic"} and report["target_seen_counts"] == report["counts"]
+    evaluations = [json.loads(line)["evaluation"] for line in lines]
+    assert all(e["head_frames"] == 4 and e["rooms_entered"] and "rooms" not in e for e in evaluations)
     evaluate_explore(suite, ["fbe", "semantic"], out, workers=2, config=config)  # nothing left to do
     assert (out / "explore-results.jsonl").read_text().splitlines() == lines

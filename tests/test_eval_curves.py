@@ -1,10 +1,13 @@
-"""Success against normalised time, computed from per-step scores."""
+"""Success and target seen against normalised time, from per-step scores and the world's reports."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from agent.eval.curves import answer_after, success_at, success_curves
+from pathlib import Path
+
+from agent.eval.curves import (answer_after, success_at, success_curves, target_seen_at, target_seen_curves,
+                               write_curves_csv)
 
 
 def _steps(*rows: tuple[str, float]) -> list[dict]:
@@ -32,4 +35,39 @@ def test_curves_average_per_method() -> None:
     wrong = {"method": "m", "budget": 2, "ground_truth": "B", "step_scores": _steps(("A", 0.5), ("A", 0.5))}
     failed = {"method": "m", "budget": 2, "ground_truth": "A", "step_scores": []}
     curves = success_curves([right, wrong, failed], np.array([0.5, 1.0]))
-    assert curves["m"].tolist() == [0.5, 0.5]
+    assert curves.by_method["m"].tolist() == [0.5, 0.5]
+    assert curves.counts == {"m": 2}
+
+
+def _seen(method: str, first_step: int | None, steps: int = 4) -> dict:
+    """A full-budget episode (budget 4) whose world report says the target was first in head frame
+    ``first_step`` (None: never)."""
+    seen = None if first_step is None else {"step": first_step, "share": 0.01, "base_pose": [0, 0, 0]}
+    return {"method": method, "budget": 4, "ground_truth": "A", "step_scores": _steps(*[("A", 0.5)] * steps),
+            "evaluation": {"target_seen": seen}}
+
+
+def test_the_target_counts_as_seen_once_the_frame_that_showed_it_has_been_taken() -> None:
+    taus = np.array([0.25, 0.5, 0.75, 1.0])  # 1, 2, 3, 4 steps: frames 0, 0-1, 0-2, 0-3
+    assert target_seen_at(_seen("m", 0), taus).tolist() == [1.0, 1.0, 1.0, 1.0]
+    assert target_seen_at(_seen("m", 2), taus).tolist() == [0.0, 0.0, 1.0, 1.0]
+    assert target_seen_at(_seen("m", None), taus).tolist() == [0.0, 0.0, 0.0, 0.0]
+
+
+def test_target_seen_rates_leave_out_episodes_without_a_report() -> None:
+    unreported = {**_seen("m", 0), "evaluation": None}
+    failed = {**_seen("m", 0), "step_scores": []}
+    rates = target_seen_curves([_seen("m", 0), _seen("m", 3), unreported, failed, _seen("n", None)],
+                               np.array([0.5, 1.0]))
+    assert rates.counts == {"m": 2, "n": 1}
+    assert rates.by_method["m"].tolist() == [0.5, 1.0] and rates.by_method["n"].tolist() == [0.0, 0.0]
+
+
+def test_the_csv_has_success_columns_then_target_seen_columns(tmp_path: Path) -> None:
+    results = [_seen("fbe", 1), _seen("semantic", None)]
+    taus = np.array([0.5, 1.0])
+    write_curves_csv(tmp_path / "curves.csv", success_curves(results, taus), target_seen_curves(results, taus), taus)
+    lines = (tmp_path / "curves.csv").read_text().splitlines()
+    assert lines[0] == ("normalised_time,fbe (n=1),semantic (n=1),"
+                        "fbe target seen (n=1),semantic target seen (n=1)")
+    assert lines[1:] == ["0.50,1.0000,1.0000,1.0000,0.0000", "1.00,1.0000,1.0000,1.0000,0.0000"]

@@ -164,6 +164,10 @@ def parse_arm_state(meta: dict[str, Any]) -> None:
     _only(meta, "arm_state", ())
 
 
+def parse_episode_report(meta: dict[str, Any]) -> None:
+    _only(meta, "episode_report", ())
+
+
 def parse_gripper(meta: dict[str, Any]) -> bool:
     """Whether to close the gripper, from ``{"action": "open" | "close"}``."""
     _only(meta, "gripper", ("action",))

@@ -6,10 +6,12 @@ Queryables (all under ``<ns>``, see `agent.bus.keys`):
                            ({"seed", "tabletop": task} -> a tabletop exploration scene instead)
 - ``world/cmd/observe``    {"camera": "head" | "wrist"} -> pose, camera, labels + arrays rgb (H,W,3
                            uint8), depth (H,W float32 metres, 0 = no return), seg (H,W int32 ids, -1 = nothing)
-- ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact
+- ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact, the route driven
 - ``world/cmd/arm_state``  {} -> joint positions, TCP pose, gripper width, what it holds
 - ``world/cmd/arm_trajectory`` {"dt", "stop_on_contact"} + array samples (N, 8) -> reached, errors, contacts
 - ``world/cmd/gripper``    {"action": "open" | "close"} -> what it holds
+- ``world/cmd/episode_report`` {} -> the evaluator's record of the episode since the last home reset
+                           (`worlds.evaluation`): for the runtime once the tree is done, never for behaviours
 - ``world/robot/description`` {} -> robot size, cameras, URDF, arm joints and limits
 
 and the liveliness token ``world/alive`` while serving. PyBullet lives in the serving thread: the
@@ -33,9 +35,11 @@ from agent.bus.keys import Keys
 from agent.bus.rpc import Arrays, CommandServer, RequestError
 from agent.bus.session import EndpointError, open_session
 from worlds import commands
+from worlds.evaluation import EpisodeRecord
 from worlds.home import generate_home
 from worlds.robot import CameraConfig
 from worlds.robot_arm import arm_spec, robot_description
+from worlds.route import driven_route
 from worlds.scenario import make_scenario
 from worlds.sim import ArmState, World
 from worlds.tabletop import tabletop_variant
@@ -57,6 +61,7 @@ class WorldServer:
         self.camera = camera or CameraConfig()
         self.ready = threading.Event()
         self._world: World | None = None
+        self._record: EpisodeRecord | None = None  # the evaluator's, for the home episode under way
 
     def serve(self, stop: threading.Event, seed: int | None = None) -> None:
         """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set."""
@@ -72,6 +77,7 @@ class WorldServer:
             server.add(self.keys.world_cmd("arm_state"), self._arm_state)
             server.add(self.keys.world_cmd("arm_trajectory"), self._arm_trajectory)
             server.add(self.keys.world_cmd("gripper"), self._gripper)
+            server.add(self.keys.world_cmd("episode_report"), self._episode_report)
             server.add(self.keys.world_description, self._description)
             token = self.session.liveliness().declare_token(self.keys.world_alive)
             self.ready.set()
@@ -102,13 +108,18 @@ class WorldServer:
         if wanted.tabletop is not None:
             scene = tabletop_variant(wanted.tabletop, wanted.seed)
             base_pose = self._world.start_tabletop(scene)
+            self._record = None
             table = {"size": list(scene.table_size), "height": TABLE_HEIGHT, "colour": scene.table_colour}
             tabletop = {"task": scene.task, "seed": scene.seed, "table": table}
             return {"tabletop": tabletop, "base_pose": list(base_pose)}, {}
         home = wanted.home or generate_home(wanted.seed, wanted.n_rooms)
-        scenario = self._world.start(home, wanted.scenario or make_scenario(home, wanted.seed))
-        home = self._world.home
-        assert home is not None
+        scenario = wanted.scenario or make_scenario(home, wanted.seed)
+        try:
+            record = EpisodeRecord(home, scenario, self.camera, scenario.start_pose[:2])
+        except ValueError as error:  # a scenario about nothing in this home
+            raise RequestError(f"reset.{error}") from None
+        self._world.start(home, scenario)
+        self._record = record
         return {
             "scenario": scenario.to_dict(),
             "home": {
@@ -123,6 +134,8 @@ class WorldServer:
         camera = commands.parse_observe(request.meta)
         world = self._built("observe")
         frame = world.observe(camera)
+        if camera == "head" and self._record is not None:
+            self._record.saw(frame, world.base_pose)
         meta = {
             "base_pose": list(world.base_pose),
             "sensor": camera,
@@ -145,13 +158,24 @@ class WorldServer:
             result = world.move_base(path, yaw)
         except ValueError as error:  # holding a handle: the base cannot leave
             raise RequestError(str(error)) from None
+        route = driven_route((x, y), path, result.travelled_m, result.base_pose[:2])
+        if self._record is not None:
+            self._record.drove(route, result.travelled_m)
         return {
             "base_pose": list(result.base_pose),
             "reached": result.reached,
             "contact": result.contact,
             "contact_point": list(result.contact_point) if result.contact_point else None,
             "travelled_m": result.travelled_m,
+            "driven": [[round(px, 4), round(py, 4)] for px, py in route],
         }, {}
+
+    def _episode_report(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        commands.parse_episode_report(request.meta)
+        self._built("episode_report")
+        if self._record is None:
+            raise RequestError("episode_report: the world holds a tabletop scene; only a home episode is recorded")
+        return self._record.report(), {}
 
     def _description(self, request: Message) -> tuple[dict[str, Any], Arrays]:
         commands.parse_description(request.meta)

@@ -23,6 +23,8 @@ log = logging.getLogger(__name__)
 
 SUITE_FORMAT = "homebot-suite"
 SUITE_VERSION = 1
+#: How many ids an unknown-id error lists.
+_IDS_SHOWN = 4
 
 
 class SuiteError(ValueError):
@@ -121,6 +123,18 @@ def read_suite(path: Path) -> list[dict[str, Any]]:
         _check_entry(entry, f"{path}:{number}")
         entries.append(entry)
     return entries
+
+
+def suite_entry(path: Path, entry_id: str) -> dict[str, Any]:
+    """The entry of a suite file with id ``entry_id``; a SuiteError naming how many entries the
+    file holds, and the first few ids, when there is none."""
+    entries = read_suite(path)
+    for entry in entries:
+        if entry["id"] == entry_id:
+            return entry
+    shown = ", ".join(entry["id"] for entry in entries[:_IDS_SHOWN]) + (", …" if len(entries) > _IDS_SHOWN else "")
+    raise SuiteError(f"{path}: no scenario with id {entry_id!r}; the suite holds {len(entries)} scenarios"
+                     + (f" ({shown})" if entries else ""))
 
 
 def _check_entry(entry: Any, where: str) -> None:

@@ -1,7 +1,8 @@
 """`homebot eval explore`: exploration methods compared over a suite, as in the paper's Q1 (Fig. 7).
 
 Every scenario runs to its full budget under each method; the figure is the success rate against
-normalised time, drawn from each episode's per-step scores (`agent.eval.curves`).
+normalised time, drawn from each episode's per-step scores, beside the share of episodes that have
+had the question's target in view by then, from the world's episode reports (`agent.eval.curves`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from agent.config import Config
-from agent.eval.curves import TAU_GRID, plot_curves, success_curves, write_curves_csv
+from agent.eval.curves import TAU_GRID, plot_curves, success_curves, target_seen_curves, write_curves_csv
 from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from worlds.suite import read_suite
 
@@ -40,10 +41,10 @@ def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: in
     results = results_for(jobs, results_path)
     for result in results:
         result["method"] = result["variant"]
-    curves = success_curves(results)
-    counts = {m: sum(r["method"] == m and bool(r["step_scores"]) for r in results) for m in curves}
-    write_curves_csv(out_dir / "curves.csv", curves, counts)
-    plot_curves(out_dir / "curves.png", curves, counts, f"Exploration methods on {suite.name}")
+    success, seen = success_curves(results), target_seen_curves(results)
+    write_curves_csv(out_dir / "curves.csv", success, seen)
+    plot_curves(out_dir / "curves.png", success, seen, f"Exploration methods on {suite.name}")
     failed = sum(r["status"] == "failed" for r in results)
-    return {"curves": {m: c.tolist() for m, c in curves.items()}, "taus": TAU_GRID.tolist(),
-            "counts": counts, "failed": failed, "results": str(results_path)}
+    return {"curves": {m: c.tolist() for m, c in success.by_method.items()}, "taus": TAU_GRID.tolist(),
+            "counts": success.counts, "target_seen": {m: c.tolist() for m, c in seen.by_method.items()},
+            "target_seen_counts": seen.counts, "failed": failed, "results": str(results_path)}

@@ -185,5 +185,11 @@ def _run_job(job: Job, base_config: Config) -> dict[str, Any]:
         "steps": result.get("steps", 0),
         "step_scores": result.get("step_scores", []),
         "acts": result.get("acts", []),
+        "evaluation": _evaluation_summary(result.get("evaluation")),
         "seconds": round(time.monotonic() - started, 2),
     }
+
+
+def _evaluation_summary(evaluation: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The world's episode report without the room outlines, which only pictures need."""
+    return None if evaluation is None else {key: value for key, value in evaluation.items() if key != "rooms"}
