@@ -11,8 +11,9 @@ from py_trees.common import Access, Status
 
 from agent import blackboard as bb
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import Candidates, ExploreConfig, nearest_frontier, plan_move, reachable_frontiers
-from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, method_flags, semantic_choice
+from agent.planning.explore import Candidates, ExploreConfig, plan_move, reachable_frontiers
+from agent.planning.frontier_choice import choose_frontier
+from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, frontier_log_weights, method_flags
 from agent.runtime.timing import StageTimer
 
 if TYPE_CHECKING:
@@ -27,7 +28,8 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
 
     FBE takes the nearest frontier; the semantic methods sample one in proportion to its weight
     from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator;
-    LFE plans over the shipped network's estimates with the steps left (`agent.lfe.explore`),
+    under the default rule both weigh the path length and keep to the frontier chosen until it is
+    reached or gone (`agent.planning.frontier_choice`, which keeps it in ``frontier_goal``); LFE plans over the shipped network's estimates with the steps left (`agent.lfe.explore`),
     loading the network on the first choice so that other methods never import torch.
     """
 
@@ -51,20 +53,21 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             self.blackboard.register_key(bb.ANSWER_LOG, access=Access.READ)
         self.blackboard.register_key(bb.OBSERVATION, access=Access.READ)
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
+        self.blackboard.register_key(bb.FRONTIER_GOAL, access=Access.WRITE)
 
     def update(self) -> Status:
         world_map = self.blackboard.get(bb.MAP)
         robot_xy = self.blackboard.get(bb.OBSERVATION).base_pose[:2]
         with self.timer.measure("planning") if self.timer else contextlib.nullcontext():
             candidates = reachable_frontiers(world_map, robot_xy, self.config)
-            if self.semantic:
-                index, _ = semantic_choice(candidates, self.blackboard.get(bb.SEMANTIC_MAP), self.weights, self.rng)
-            elif self.learned:
+            if self.learned:
                 index = self._learned_choice(world_map, robot_xy, candidates) if candidates.frontiers else None
             else:
-                index = nearest_frontier(candidates)
+                index = self._weighted_choice(world_map, candidates)
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
         self.blackboard.set(bb.PLAN, plan)
+        self.blackboard.set(bb.FRONTIER_GOAL, None if plan is None else world_map.spec.to_world(
+            np.asarray(plan.frontier.centre)))
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.SUCCESS
@@ -72,6 +75,18 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
+    def _weighted_choice(self, world_map: ExplorationMap, candidates: Candidates) -> int | None:
+        """FBE's or the semantic methods' choice under the configured rule."""
+        if not candidates.frontiers:
+            return None
+        log_weights = None
+        if self.semantic:
+            semantic_map = self.blackboard.get(bb.SEMANTIC_MAP)
+            log_weights = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
+                                               self.weights, semantic_map.default)
+        centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]))
+        return choose_frontier(centres, candidates.distances_m, log_weights, self.blackboard.get(bb.FRONTIER_GOAL),
+                               self.config.choice, self.rng)
 
     def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
         from agent.lfe.estimator import LearnedEstimator

@@ -1,8 +1,14 @@
-"""Navigate: drive the planned path; the world stops at the first contact and says so."""
+"""Navigate: drive the planned path; the world stops at the first contact and says so.
+
+The route the world says it drove (its reply's ``driven``) goes onto the trajectory corner by
+corner, so a picture of the run follows the base around walls instead of cutting through them.
+"""
 
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
 
 from py_trees.common import Access, Status
 
@@ -19,6 +25,7 @@ class Navigate(WorldCommand):
         self.blackboard.register_key(bb.PLAN, access=Access.READ)
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
         self.blackboard.register_key(bb.MAP, access=Access.READ)
+        self.blackboard.register_key(bb.FRONTIER_GOAL, access=Access.WRITE)
 
     def request(self) -> dict[str, Any]:
         plan = self.blackboard.get(bb.PLAN)
@@ -32,8 +39,14 @@ class Navigate(WorldCommand):
             self.feedback_message = "move_base reply: base_pose must be [x, y, yaw]"
             return Status.FAILURE
         trajectory = self.blackboard.get(bb.TRAJECTORY)
+        corners = _corners(message.meta.get("driven"), trajectory[-1][2] if trajectory else float(pose[2]))
+        route = [trajectory[-1], *corners, pose] if trajectory else [*corners, pose]
+        self.blackboard.get(bb.MAP).mark_driven(np.array([(float(p[0]), float(p[1])) for p in route]))
+        trajectory.extend(corners)
         trajectory.append(tuple(float(v) for v in pose))
         contact = message.meta.get("contact")
+        if contact:  # the way to the frontier is blocked: choose afresh rather than push on
+            self.blackboard.set(bb.FRONTIER_GOAL, None)
         travelled = float(message.meta.get("travelled_m", 0.0))
         point = message.meta.get("contact_point")
         if isinstance(point, list) and len(point) == 2:
@@ -43,3 +56,12 @@ class Navigate(WorldCommand):
         else:
             self.feedback_message = f"moved {travelled:.2f} m to ({pose[0]:.2f}, {pose[1]:.2f})"
         return Status.SUCCESS
+
+
+def _corners(driven: Any, heading: float) -> list[tuple[float, float, float]]:
+    """The inner points of a move_base reply's ``driven`` route, as poses at the heading the base
+    drove with (it turns only at the end). Its first point is where the base stood, already on the
+    trajectory; its last is the reply's ``base_pose``. A malformed route adds nothing."""
+    if not (isinstance(driven, list) and all(isinstance(p, list) and len(p) == 2 for p in driven)):
+        return []
+    return [(float(x), float(y), heading) for x, y in driven[1:-1]]

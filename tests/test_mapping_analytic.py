@@ -103,3 +103,16 @@ def test_cell_centres_lie_on_the_voxel_lattice() -> None:
 def test_a_map_resolution_that_splits_voxels_is_refused_by_name(value: str, problem: str) -> None:
     with pytest.raises(ConfigError, match=rf"map\.resolution.*{problem}"):
         load_config(None, [f"map.resolution={value}"])
+
+
+def test_floor_seen_far_away_at_a_grazing_angle_is_free() -> None:
+    """A 12 m hall looked down from one end: the floor 3 to 6 m ahead (depth_max) is free too."""
+    hall = BoxRoom((0.0, 0.0, 12.0, 4.0), walls_with_doorway(0.0, 0.0, 12.0, 4.0, (4.0, 4.0)))
+    start = (0.6, 2.0)
+    world_map = ExplorationMap(start, OccupancyConfig(size_m=30))
+    hits = survey(hall, world_map, start, headings=1)
+    far = hits[(np.hypot(*(hits - np.asarray(start)).T) > 3.0) & (np.hypot(*(hits - np.asarray(start)).T) < 5.8)
+               & (hits[:, 1] > 0.2) & (hits[:, 1] < 3.8)]
+    cells = world_map.spec.to_cell(far)
+    share = world_map.free[cells[:, 0], cells[:, 1]].mean()
+    assert len(far) > 1000 and share >= 0.98, f"{share:.0%} of the floor seen 3-6 m away is free"

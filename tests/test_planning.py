@@ -10,7 +10,8 @@ from scipy import ndimage
 
 from agent.mapping.grid import GridSpec
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.planning.explore import ExploreConfig, nearest_frontier, plan_move, reachable_frontiers
+from agent.planning.explore import ExploreConfig, plan_move, reachable_frontiers
+from agent.planning.frontier_choice import FrontierChoiceConfig, choose_frontier
 from agent.planning.frontier import cluster_frontiers, frontier_cells
 from agent.planning.paths import distance_field, path_length, simplify_path, truncate_path
 
@@ -279,6 +280,13 @@ def corridor_map() -> ExplorationMap:
     world_map.occupied = occupied
     world_map.stood = np.zeros_like(explored)
     return world_map
+
+
+def nearest_frontier(candidates) -> int | None:
+    """FBE's choice with no earlier goal."""
+    centres = np.array([list(f.centre) for f in candidates.frontiers], dtype=float).reshape(-1, 2)
+    return choose_frontier(centres, candidates.distances_m, None, None, FrontierChoiceConfig(),
+                           np.random.default_rng(0))
 
 
 def test_reachable_frontiers_and_nearest() -> None:

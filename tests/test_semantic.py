@@ -22,17 +22,15 @@ from agent.planning.prompt_points import (
     prompt_points,
     visible_free_cells,
 )
+from agent.planning.frontier_choice import FrontierChoiceConfig, choose_frontier, frontier_probabilities, sample_frontier
 from agent.planning.semantic import (
     ExploreMethod,
     FrontierWeightConfig,
     frontier_log_weights,
-    frontier_probabilities,
     method_flags,
     new_semantic_map,
     normal_ray_cells,
     point_values,
-    sample_frontier,
-    semantic_choice,
 )
 
 # --- a camera over an open floor ----------------------------------------------------------------
@@ -378,7 +376,7 @@ def test_sampling_is_deterministic_for_a_seed() -> None:
     assert len(set(first)) == 1
 
 
-def test_semantic_choice_on_reachable_frontiers() -> None:
+def test_sampled_choice_on_reachable_frontiers_follows_the_weights() -> None:
     world_map = ExplorationMap((0.0, 0.0), OccupancyConfig(size_m=10))
     explored = np.zeros(world_map.spec.shape, dtype=bool)
     explored[:, 40:60] = True  # explored band x -1..1; open to both sides
@@ -391,14 +389,15 @@ def test_semantic_choice_on_reachable_frontiers() -> None:
     semantic_map = new_semantic_map(world_map.spec, "semantic")
     beyond = world_map.spec.to_world(np.array(candidates.frontiers[right].centre)) + [1.5, 0.0]
     semantic_map.update(beyond[None, :], [float(semantic_value(1.0, 1.0))])
+    logs = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
+                                FrontierWeightConfig(), semantic_map.default)
+    assert frontier_probabilities(logs)[right] > 0.6
+    centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]))
     rng = np.random.default_rng(0)
-    picks = [semantic_choice(candidates, semantic_map, FrontierWeightConfig(), rng) for _ in range(200)]
-    probabilities = picks[0][1]
-    assert probabilities.sum() == pytest.approx(1.0) and probabilities[right] > 0.6
-    assert sum(index == right for index, _ in picks) > 100
-    empty = replace(candidates, frontiers=[], distances_m=np.zeros(0))
-    index, weights = semantic_choice(empty, semantic_map, FrontierWeightConfig(), rng)
-    assert index is None and len(weights) == 0
+    paper = FrontierChoiceConfig(rule="sample")
+    picks = [choose_frontier(centres, candidates.distances_m, logs, None, paper, rng) for _ in range(200)]
+    assert sum(index == right for index in picks) > 100
+    assert choose_frontier(np.zeros((0, 2)), np.zeros(0), np.zeros(0), None, paper, rng) is None
 
 
 # --- frontier normals on hand-made maps ---------------------------------------------------------

@@ -1,7 +1,8 @@
 """The 2D maps the planners use, derived from the TSDF and the camera's narrow view.
 
 - occupied: a column holds a surface voxel between ``obstacle_min_z`` and the robot's height,
-  unless the robot has driven through it;
+  within a cell of where some depth pixel has landed at that height, unless the robot has driven
+  through it;
 - floor seen: a column holds a surface voxel at floor height;
 - free: floor seen and not occupied, or near a pose the robot has stood on;
 - explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows), or
@@ -13,7 +14,10 @@ and explored lets frontiers form at its edge, so a robot that starts facing a wa
 
 Surface voxels are the TSDF's zero crossings (`agent.mapping.surface`), and each voxel goes to the
 2D cell by its integer lattice index: the grid is laid so that voxel samples sit at cell centres,
-never on a cell boundary where float rounding would decide the cell.
+never on a cell boundary where float rounding would decide the cell. A TSDF averages its views, so
+free space seen past a door jamb from one spot and behind the jamb from another averages to
+near zero and looks like a surface hanging in the doorway; no depth pixel ever lands there, so
+obstacles also need a depth hit in or beside their cell.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ class OccupancyConfig:
     floor_band: tuple[float, float] = (-0.12, 0.08)
     obstacle_min_z: float = 0.12
     obstacle_max_z: float = 1.6
-    surface_tsdf: float = 0.6  # the most |normalised TSDF| the voxel nearer a zero crossing may have
+    surface_tsdf: float = 1.0  # the most |normalised TSDF| two voxels of a zero crossing may add up to
     robot_radius: float = 0.25
     near_field_radius: float = 1.0  # floor the head camera cannot see around a pose it stood on
     driven_radius: float = 0.15  # around the path the base drove, no obstacle can stand
@@ -100,19 +104,29 @@ class ExplorationMap:
         self.floor_seen = np.zeros(self.spec.shape, dtype=bool)
         self.occupied = np.zeros(self.spec.shape, dtype=bool)
         self.bumped = np.zeros(self.spec.shape, dtype=bool)
+        self.obstacle_hits = np.zeros(self.spec.shape, dtype=bool)  # a depth pixel landed at obstacle height
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
                   robot_xy: tuple[float, float]) -> None:
         """Fuse one frame taken with the robot at ``robot_xy``."""
         self.tsdf.integrate(depth, intrinsics, camera_to_world)
-        self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), self.config)
+        points = back_project(depth, intrinsics, camera_to_world)
+        narrow = narrow_view_mask(*depth.shape)[depth > 0]
+        config = self.config
+        at_height = (points[:, 2] >= config.obstacle_min_z) & (points[:, 2] <= config.obstacle_max_z)
+        self._mark(self.obstacle_hits, points[at_height])
+        self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), config)
+        occupied &= ndimage.binary_dilation(self.obstacle_hits, structure=np.ones((3, 3), dtype=bool))
         self.occupied = (occupied & ~self.driven) | self.bumped
-        self.stood |= self.spec.disc(robot_xy, self.config.near_field_radius) & ~self.occupied
-        narrow = back_project(depth, intrinsics, camera_to_world, narrow_view_mask(*depth.shape))
-        cells = self.spec.to_cell(narrow[:, :2])
-        cells = cells[self.spec.inside(cells)]
-        self.explored[cells[:, 0], cells[:, 1]] = True
+        self.stood |= self.spec.disc(robot_xy, config.near_field_radius) & ~self.occupied
+        self._mark(self.explored, points[narrow])
         self.explored |= self.stood
+
+    def _mark(self, grid: np.ndarray, points: np.ndarray) -> None:
+        """Set the cells of ``grid`` that the points (N, 3) fall in."""
+        cells = self.spec.to_cell(points[:, :2])
+        cells = cells[self.spec.inside(cells)]
+        grid[cells[:, 0], cells[:, 1]] = True
 
     def mark_driven(self, path_xy: np.ndarray) -> None:
         """Record the polyline (K, 2) the base drove along: no obstacle stands where the base has

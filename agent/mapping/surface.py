@@ -16,18 +16,21 @@ import numpy as np
 from agent.mapping.tsdf import Voxels
 
 
-def surface_voxels(voxels: Voxels, max_tsdf: float, near_tsdf: float) -> np.ndarray:
+def surface_voxels(voxels: Voxels, max_pair_tsdf: float, near_tsdf: float) -> np.ndarray:
     """A boolean mask over ``voxels``: true where a surface passes through the voxel.
 
     A voxel is on a surface when the TSDF changes sign between it and a neighbour along x, y or z
     and it is the nearer of the two to the crossing (the smaller |tsdf|), or when its own value
-    says the surface is within half a voxel of it. A crossing between two voxels that both lie
-    ``max_tsdf`` or more from a surface is no surface: it is the edge of a truncation band (the
-    free side of a near object meeting the far side of the wall behind it).
+    says the surface is within ``near_tsdf`` of it. Across a real surface the two values are both
+    small: they differ by a voxel's share of the truncation distance, more at a grazing angle
+    (about 0.8 for floor 5 m away). A pair whose |tsdf| add up to more than ``max_pair_tsdf`` is
+    no surface but a shadow's edge: free space seen past a door jamb (+1, truncated) beside the
+    space just behind the jamb (small and negative), which would otherwise narrow every doorway
+    seen at an angle.
 
     Args:
         voxels: the observed voxels (integer indices and normalised TSDF).
-        max_tsdf: the largest |tsdf| the nearer voxel of a crossing may have.
+        max_pair_tsdf: the largest |tsdf| the two voxels of a crossing may add up to.
         near_tsdf: a voxel with |tsdf| up to this is on a surface whatever its neighbours (half a
             voxel over the truncation distance: the surface passes through the voxel's cell).
 
@@ -49,8 +52,10 @@ def surface_voxels(voxels: Voxels, max_tsdf: float, near_tsdf: float) -> np.ndar
         there = [slice(None)] * 3
         here[axis], there[axis] = slice(None, -1), slice(1, None)
         a, b = field[tuple(here)], field[tuple(there)]
-        crossing = (a * b <= 0) & ~((a == 0) & (b == 0))  # NaN compares false: unobserved never crosses
-        a_nearer = magnitude[tuple(here)] <= magnitude[tuple(there)]
-        on_surface[tuple(here)] |= crossing & a_nearer & (magnitude[tuple(here)] < max_tsdf)
-        on_surface[tuple(there)] |= crossing & ~a_nearer & (magnitude[tuple(there)] < max_tsdf)
+        size_a, size_b = magnitude[tuple(here)], magnitude[tuple(there)]
+        # NaN compares false: an unobserved voxel never crosses.
+        crossing = (a * b <= 0) & ~((a == 0) & (b == 0)) & (size_a + size_b <= max_pair_tsdf)
+        a_nearer = size_a <= size_b
+        on_surface[tuple(here)] |= crossing & a_nearer
+        on_surface[tuple(there)] |= crossing & ~a_nearer
     return on_surface[local]

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
+from agent.planning.frontier_choice import FrontierChoiceConfig
 from agent.planning.frontier import Frontier, cluster_frontiers, frontier_cells
 from agent.planning.paths import DistanceField, clearance_cost, distance_field, simplify_path, truncate_path
 
@@ -21,6 +22,7 @@ class ExploreConfig:
     min_unexplored_neighbours: int = 2
     comfort_m: float = 0.3  # beyond the robot's radius, clearance that paths prefer to keep
     obstacle_cost: float = 3.0  # extra cost per metre right at the robot's radius from an obstacle
+    choice: FrontierChoiceConfig = field(default_factory=FrontierChoiceConfig)  # which frontier to head for
 
     def __post_init__(self) -> None:
         from agent.planning.semantic import ExploreMethod  # semantic builds on this module
@@ -72,11 +74,6 @@ def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float]
     distances = np.array([field.metres[f.centre] for f in frontiers])
     keep = distances >= config.min_frontier_distance_m
     return Candidates([f for f, k in zip(frontiers, keep) if k], distances[keep], field, traversable)
-
-
-def nearest_frontier(candidates: Candidates) -> int | None:
-    """Plain FBE: the index of the frontier with the shortest path, None when there is none."""
-    return int(np.argmin(candidates.distances_m)) if len(candidates.frontiers) else None
 
 
 def plan_move(candidates: Candidates, index: int, robot_xy: tuple[float, float],

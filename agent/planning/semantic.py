@@ -5,7 +5,7 @@ the semantic map at the frontier, SV_p,normal the mean along its normal into the
 out to d_SV. The second term is what steers the robot *toward* a valued region that lies a few
 metres beyond a frontier, rather than only to frontiers that happen to sit on one. The next
 frontier is then *sampled* ∝ w_p, not taken as the best, so that a wrong VLM judgement only
-tilts exploration rather than trapping the robot.
+tilts exploration rather than trapping the robot (`agent.planning.frontier_choice`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ import numpy as np
 
 from agent.mapping.grid import GridSpec
 from agent.mapping.semantic_map import SemanticMap, SemanticValueConfig, indifferent_value, semantic_value
-from agent.planning.explore import Candidates
 from agent.planning.frontier import Frontier
 
 
@@ -49,7 +48,7 @@ class ExploreMethod(StrEnum):
 class MethodFlags:
     use_lsv: bool
     use_gsv: bool
-    use_semantic: bool  # False: pick frontiers without the semantic map (nearest_frontier)
+    use_semantic: bool  # False: pick frontiers without the semantic map (FBE's nearest, or LFE)
 
 
 def method_flags(method: ExploreMethod | str) -> MethodFlags:
@@ -117,31 +116,3 @@ def frontier_log_weights(frontiers: Sequence[Frontier], values: np.ndarray, spec
         along = float(values[ray[:, 0], ray[:, 1]].mean()) if len(ray) else default
         logs[i] = config.tau_sv * float(values[frontier.centre]) + config.tau_sv_normal * along
     return logs
-
-
-def frontier_probabilities(log_weights: np.ndarray) -> np.ndarray:
-    """w / Σw computed from exponents, with the largest subtracted first so nothing overflows."""
-    log_weights = np.asarray(log_weights, dtype=float)
-    shifted = np.exp(log_weights - log_weights.max())
-    return shifted / shifted.sum()
-
-
-def sample_frontier(log_weights: np.ndarray, rng: np.random.Generator) -> int:
-    """An index drawn ∝ exp(log_weights); raises ValueError when there is nothing to draw."""
-    if len(log_weights) == 0:
-        raise ValueError("no frontier to sample")
-    probabilities = frontier_probabilities(log_weights)
-    return int(rng.choice(len(probabilities), p=probabilities))
-
-
-def semantic_choice(candidates: Candidates, semantic_map: SemanticMap, config: FrontierWeightConfig,
-                    rng: np.random.Generator) -> tuple[int | None, np.ndarray]:
-    """The semantic counterpart of ``nearest_frontier``: (sampled index, selection probabilities).
-
-    Returns (None, empty) when there is no candidate, like ``nearest_frontier``.
-    """
-    if not candidates.frontiers:
-        return None, np.zeros(0)
-    logs = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec, config,
-                                semantic_map.default)
-    return sample_frontier(logs, rng), frontier_probabilities(logs)

@@ -93,6 +93,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         result.update(_scenario_fields(scenario, config))
         outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, stopping, link,
                                                    session, keys, folder, timer, extra_sinks or [])
+        evaluation = _episode_report(link, config.bus.query_timeout_s)
     except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError) as error:
         reason = f"the episode could not start: {error}"
         result.update({"status": "failed", "reason": reason, "correct": False})
@@ -104,12 +105,12 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
             world.stop()
         session.close()
     result.update(_outcome_fields(outcome, result))
+    result["evaluation"] = evaluation
     if timer is not None:
         result["timings"] = timer.summary()
     write_json_atomic(folder / "result.json", result)
     if request.save_map:
-        title = f"{result['question']}\nanswer {result['answer'] or '—'}, truth {result['ground_truth']} ({result['status']})"
-        save_map_png(folder / "map.png", world_map, trajectory, title)
+        save_map_png(folder / "map.png", world_map, trajectory, result)
     result["folder"] = str(folder)
     return result
 
@@ -129,6 +130,7 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
         bb.ANSWER_LOG: AnswerLog(),
         bb.TRAJECTORY: [start],
         bb.PLAN: None,
+        bb.FRONTIER_GOAL: None,
         bb.EXPLORATION_COMPLETE: False,
     }
     for key, value in initial.items():
@@ -166,6 +168,18 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     # interpreter exit, where open3d reports any device memory still held as a leak and fails.
     py_trees.blackboard.Blackboard.clear()
     return outcome, world_map, trajectory
+
+
+def _episode_report(link: WorldLink, timeout_s: float) -> dict[str, Any] | None:
+    """The world's evaluator-side record of the episode (worlds.evaluation), fetched here, after the
+    tree has finished, so no behaviour and no VLM ever sees it; None when the world cannot say
+    (it is gone, or predates the command)."""
+    try:
+        reply = link.call("episode_report", {}, timeout_s=timeout_s).meta
+    except QueryFailed as error:
+        log.warning("no evaluator's report of the episode: %s", error)
+        return None
+    return {key: value for key, value in reply.items() if key != "ok"}
 
 
 def _stopping_rule(config: Config) -> tuple[StoppingRule, dict[str, Any]]:
