@@ -356,11 +356,15 @@ def _eval_explore(args: argparse.Namespace) -> int:
         return 2
     taus = report["taus"]
     marks = [i for i, tau in enumerate(taus) if round(tau, 2) in (0.25, 0.5, 0.75, 1.0)]
-    for heading, curves, counts in (("success", report["curves"], report["counts"]),
-                                    ("target seen", report["target_seen"], report["target_seen_counts"])):
+    for heading, curves, counts, unit in (("success", report["curves"], report["counts"], "%"),
+                                          ("target seen", report["target_seen"], report["target_seen_counts"], "%"),
+                                          ("floor seen", report["floor_seen"], report["reported_counts"], "%"),
+                                          ("rooms entered", report["rooms_entered"], report["reported_counts"], "")):
         print(f"{heading:<18} {'n':>4} " + " ".join(f"{'τ=' + format(taus[i], '.2f'):>7}" for i in marks))
+        scale = 100 if unit else 1
         for method, curve in curves.items():
-            print(f"  {method:<16} {counts[method]:>4} " + " ".join(f"{100 * curve[i]:>6.1f}%" for i in marks))
+            print(f"  {method:<16} {counts[method]:>4} "
+                  + " ".join(f"{scale * curve[i]:>6.1f}{unit or ' '}" for i in marks))
     print(f"{report['failed']} failed episodes; results {report['results']}; curves in {args.out}/curves.png and .csv")
     return 0
 

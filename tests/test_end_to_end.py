@@ -171,9 +171,14 @@ def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
     assert set(report["curves"]) == {"fbe", "semantic"} and report["counts"] == {"fbe": 2, "semantic": 2}
     assert (out / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     header = (out / "curves.csv").read_text().splitlines()[0]
-    assert header == "normalised_time,fbe (n=2),semantic (n=2),fbe target seen (n=2),semantic target seen (n=2)"
+    assert header == ("normalised_time,fbe (n=2),semantic (n=2),fbe target seen (n=2),semantic target seen (n=2),"
+                      "fbe floor seen (n=2),semantic floor seen (n=2),fbe rooms entered (n=2),semantic rooms entered (n=2)")
     assert set(report["target_seen"]) == {"fbe", "semantic"} and report["target_seen_counts"] == report["counts"]
+    assert all(0 < curve[-1] <= 1 for curve in report["floor_seen"].values())
+    assert all(curve[-1] >= 1 for curve in report["rooms_entered"].values())
     evaluations = [json.loads(line)["evaluation"] for line in lines]
     assert all(e["head_frames"] == 4 and e["rooms_entered"] and "rooms" not in e for e in evaluations)
+    assert all(len(e["floor_seen_by_frame"]) == 4 and e["floor_seen_by_frame"] == sorted(e["floor_seen_by_frame"])
+               for e in evaluations)
     evaluate_explore(suite, ["fbe", "semantic"], out, workers=2, config=config)  # nothing left to do
     assert (out / "explore-results.jsonl").read_text().splitlines() == lines

@@ -121,6 +121,8 @@ def test_moves_report_their_route_and_turning_aside_shows_more_floor() -> None:
     assert after["travelled_m"] == pytest.approx(moved["travelled_m"], abs=1e-3)
     assert after["floor_seen_m2"] > before["floor_seen_m2"]
     assert after["target_seen"] == before["target_seen"]  # the first sight stays the first
+    assert after["floor_seen_by_frame"] == [before["floor_seen_m2"], after["floor_seen_m2"]]
+    assert after["rooms_entered_by_frame"][0] == 1 and after["rooms_entered_by_frame"][1] == len(after["rooms_entered"])
 
 
 def test_the_report_refuses_a_tabletop_and_a_scenario_about_nothing_in_the_home() -> None:

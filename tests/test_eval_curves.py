@@ -1,4 +1,4 @@
-"""Success and target seen against normalised time, from per-step scores and the world's reports."""
+"""Success, target seen and coverage against normalised time, from per-step scores and the world's reports."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 
 from pathlib import Path
 
-from agent.eval.curves import (answer_after, success_at, success_curves, target_seen_at, target_seen_curves,
-                               write_curves_csv)
+from agent.eval.curves import (answer_after, coverage_at, coverage_curves, explore_panels, rooms_entered_at,
+                               success_at, success_curves, target_seen_at, target_seen_curves, write_curves_csv)
 
 
 def _steps(*rows: tuple[str, float]) -> list[dict]:
@@ -41,10 +41,12 @@ def test_curves_average_per_method() -> None:
 
 def _seen(method: str, first_step: int | None, steps: int = 4) -> dict:
     """A full-budget episode (budget 4) whose world report says the target was first in head frame
-    ``first_step`` (None: never)."""
+    ``first_step`` (None: never), with 10 m² more of 40 m² floor seen and one more room every frame."""
     seen = None if first_step is None else {"step": first_step, "share": 0.01, "base_pose": [0, 0, 0]}
     return {"method": method, "budget": 4, "ground_truth": "A", "step_scores": _steps(*[("A", 0.5)] * steps),
-            "evaluation": {"target_seen": seen}}
+            "evaluation": {"target_seen": seen, "free_floor_m2": 40.0,
+                           "floor_seen_by_frame": [10.0 * (i + 1) for i in range(steps)],
+                           "rooms_entered_by_frame": [i + 1 for i in range(steps)]}}
 
 
 def test_the_target_counts_as_seen_once_the_frame_that_showed_it_has_been_taken() -> None:
@@ -63,11 +65,24 @@ def test_target_seen_rates_leave_out_episodes_without_a_report() -> None:
     assert rates.by_method["m"].tolist() == [0.5, 1.0] and rates.by_method["n"].tolist() == [0.0, 0.0]
 
 
-def test_the_csv_has_success_columns_then_target_seen_columns(tmp_path: Path) -> None:
-    results = [_seen("fbe", 1), _seen("semantic", None)]
+def test_coverage_and_rooms_follow_the_frames_taken_and_a_short_episode_keeps_its_last() -> None:
+    taus = np.array([0.25, 0.5, 0.75, 1.0])
+    assert coverage_at(_seen("m", 0), taus).tolist() == [0.25, 0.5, 0.75, 1.0]
+    assert rooms_entered_at(_seen("m", 0), taus).tolist() == [1, 2, 3, 4]
+    short = _seen("m", 0, steps=2)
+    assert coverage_at(short, taus).tolist() == [0.25, 0.5, 0.5, 0.5]
+    old_file = {**_seen("m", 0), "evaluation": {"target_seen": None}}  # a report without the progress
+    assert coverage_curves([old_file, _seen("m", 0)], taus).counts == {"m": 1}
+
+
+def test_the_csv_has_success_columns_then_the_reports_columns(tmp_path: Path) -> None:
+    results = [_seen("fbe", 1), _seen("semantic", None, steps=2)]
     taus = np.array([0.5, 1.0])
-    write_curves_csv(tmp_path / "curves.csv", success_curves(results, taus), target_seen_curves(results, taus), taus)
+    write_curves_csv(tmp_path / "curves.csv", explore_panels(results, "t", taus), taus)
     lines = (tmp_path / "curves.csv").read_text().splitlines()
     assert lines[0] == ("normalised_time,fbe (n=1),semantic (n=1),"
-                        "fbe target seen (n=1),semantic target seen (n=1)")
-    assert lines[1:] == ["0.50,1.0000,1.0000,1.0000,0.0000", "1.00,1.0000,1.0000,1.0000,0.0000"]
+                        "fbe target seen (n=1),semantic target seen (n=1),"
+                        "fbe floor seen (n=1),semantic floor seen (n=1),"
+                        "fbe rooms entered (n=1),semantic rooms entered (n=1)")
+    assert lines[1:] == ["0.50,1.0000,1.0000,1.0000,0.0000,0.5000,0.5000,2.0000,2.0000",
+                         "1.00,1.0000,1.0000,1.0000,0.0000,1.0000,0.5000,4.0000,2.0000"]

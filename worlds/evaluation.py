@@ -17,6 +17,8 @@ sends at all (docs/bus.md has the fields).
   walls, furniture or things on the floor) whose cells a head frame's floor pixels landed in, at
   any distance. The agent's own map is not consulted: this is what was in view, not what the
   agent made of it.
+- Progress: after every head frame, the floor seen so far and how many rooms the base has entered,
+  so coverage can be drawn against time.
 """
 
 from __future__ import annotations
@@ -82,6 +84,8 @@ class EpisodeRecord:
         self.first_seen: dict[str, Any] | None = None
         self.best_view: dict[str, Any] | None = None
         self.rooms_entered: list[str] = []
+        self.floor_seen_by_frame: list[float] = []
+        self.rooms_entered_by_frame: list[int] = []
         self.travelled_m = 0.0
         self._target_ids = np.array(sorted(self.target.ids))
         self._enter(start)
@@ -98,6 +102,8 @@ class EpisodeRecord:
                 self.best_view = view
         self.floor.add(frame)
         self.head_frames += 1
+        self.floor_seen_by_frame.append(round(self.floor.seen_m2, 2))
+        self.rooms_entered_by_frame.append(len(self.rooms_entered))
 
     def drove(self, route: Sequence[Point], travelled_m: float) -> None:
         """A base move along ``route`` (`worlds.route.driven_route`), ``travelled_m`` long."""
@@ -123,5 +129,7 @@ class EpisodeRecord:
             "rooms": [{"name": room.name, "polygon": room.polygon} for room in self.home.rooms],
             "free_floor_m2": round(self.floor.free_m2, 2),
             "floor_seen_m2": round(self.floor.seen_m2, 2),
+            "floor_seen_by_frame": list(self.floor_seen_by_frame),
+            "rooms_entered_by_frame": list(self.rooms_entered_by_frame),
             "travelled_m": round(self.travelled_m, 3),
         }

@@ -1,4 +1,4 @@
-"""Success rate and target-seen rate against normalised time, as in Explore until Confident's Fig. 7.
+"""Success, target seen and coverage against normalised time, as in Explore until Confident's Fig. 7.
 
 Every episode runs to its full budget T and records each step's scores. Stopping after k steps
 would answer argmax f̂ at the most relevant of those k steps, so one run gives the answer at every
@@ -9,7 +9,9 @@ Beside success goes the share of episodes that have had the question's target in
 the world's episode report (`worlds.evaluation`). The world numbers head frames from 0 and the tree
 takes one per step, so after k steps frames 0..k-1 have been taken: the target has been seen when
 its first frame's number is below k. A method that sees the target as early as another yet answers
-worse has a VLM or stopping problem, not an exploration one.
+worse has a VLM or stopping problem, not an exploration one. Coverage (the share of the home's free
+floor seen) and the rooms entered after k steps come from the same report, frame k-1's figures:
+they show whether a method covers the home or keeps going back to where it has been.
 """
 
 from __future__ import annotations
@@ -60,6 +62,25 @@ def target_seen_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.nd
     return (first < steps_taken(result, taus)).astype(float)
 
 
+def coverage_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
+    """The share of the home's free floor seen by each normalised time (0..1)."""
+    evaluation = result["evaluation"]
+    seen = _by_frame(evaluation["floor_seen_by_frame"], steps_taken(result, taus))
+    return seen / evaluation["free_floor_m2"] if evaluation["free_floor_m2"] > 0 else np.zeros(len(taus))
+
+
+def rooms_entered_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
+    """How many rooms the base has entered by each normalised time."""
+    return _by_frame(result["evaluation"]["rooms_entered_by_frame"], steps_taken(result, taus))
+
+
+def _by_frame(values: list[float], steps: np.ndarray) -> np.ndarray:
+    """A per-head-frame figure after each number of steps; an episode that ended early keeps its last."""
+    if not values:
+        return np.zeros(len(steps))
+    return np.asarray(values, dtype=float)[np.minimum(steps, len(values)) - 1]
+
+
 def success_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
     """Mean success per method at each τ, over that method's finished episodes."""
     return _rates(results, success_at, lambda result: bool(result.get("step_scores")), taus)
@@ -72,6 +93,21 @@ def target_seen_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRI
                   lambda result: bool(result.get("step_scores")) and result.get("evaluation") is not None, taus)
 
 
+def coverage_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
+    """Mean share of the free floor seen per method at each τ, over episodes with a report."""
+    return _rates(results, coverage_at, _reported, taus)
+
+
+def rooms_entered_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
+    """Mean number of rooms entered per method at each τ, over episodes with a report."""
+    return _rates(results, rooms_entered_at, _reported, taus)
+
+
+def _reported(result: dict[str, Any]) -> bool:
+    evaluation = result.get("evaluation")
+    return bool(result.get("step_scores")) and evaluation is not None and "floor_seen_by_frame" in evaluation
+
+
 def _rates(results: list[dict[str, Any]], measure: Callable[[dict[str, Any], np.ndarray], np.ndarray],
            counted: Callable[[dict[str, Any]], bool], taus: np.ndarray) -> Rates:
     by_method: dict[str, list[np.ndarray]] = {}
@@ -82,10 +118,34 @@ def _rates(results: list[dict[str, Any]], measure: Callable[[dict[str, Any], np.
                  {method: len(rows) for method, rows in sorted(by_method.items())})
 
 
-def write_curves_csv(path: Path, success: Rates, seen: Rates, taus: np.ndarray = TAU_GRID) -> None:
-    """One row per τ: each method's success rate, then each method's target-seen rate."""
-    columns = [(f"{m} (n={n})", success.by_method[m]) for m, n in success.counts.items()]
-    columns += [(f"{m} target seen (n={n})", seen.by_method[m]) for m, n in seen.counts.items()]
+@dataclass(frozen=True)
+class Panel:
+    """One measure's curves as the CSV and the figure show them: a column prefix, an axis label and
+    a heading; ``percent``: the rates are shares, shown ×100."""
+
+    rates: Rates
+    column: str
+    ylabel: str
+    heading: str
+    percent: bool = True
+
+
+def explore_panels(results: list[dict[str, Any]], title: str, taus: np.ndarray = TAU_GRID) -> list[Panel]:
+    """Success, target seen, floor seen and rooms entered, in that order."""
+    return [
+        Panel(success_curves(results, taus), "", "success rate [%]", title),
+        Panel(target_seen_curves(results, taus), " target seen", "target seen so far [%]",
+              "Has the question's target been in view?"),
+        Panel(coverage_curves(results, taus), " floor seen", "free floor seen [%]", "Coverage of the home"),
+        Panel(rooms_entered_curves(results, taus), " rooms entered", "rooms entered (mean)",
+              "Rooms the base has entered", percent=False),
+    ]
+
+
+def write_curves_csv(path: Path, panels: list[Panel], taus: np.ndarray = TAU_GRID) -> None:
+    """One row per τ: each panel's columns, one per method (success first, as `explore_panels` orders)."""
+    columns = [(f"{m}{panel.column} (n={n})", panel.rates.by_method[m])
+               for panel in panels for m, n in panel.rates.counts.items()]
     with open(path, "w", newline="") as out:
         writer = csv.writer(out)
         writer.writerow(["normalised_time", *(name for name, _ in columns)])
@@ -93,29 +153,34 @@ def write_curves_csv(path: Path, success: Rates, seen: Rates, taus: np.ndarray =
             writer.writerow([f"{tau:.2f}", *(f"{curve[i]:.4f}" for _, curve in columns)])
 
 
-def plot_curves(path: Path, success: Rates, seen: Rates, title: str, taus: np.ndarray = TAU_GRID) -> None:
-    """Success (left) and target seen (right) against normalised time, one colour per method in both."""
+def plot_curves(path: Path, panels: list[Panel], taus: np.ndarray = TAU_GRID) -> None:
+    """The panels side by side, two to a row, one colour per method throughout."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4), dpi=120, sharex=True)
-    methods = sorted(set(success.counts) | set(seen.counts))
+    rows = (len(panels) + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(11.5, 4.2 * rows), dpi=120, sharex=True, squeeze=False)
+    methods = sorted(set().union(*(panel.rates.counts for panel in panels)))
     colours = {method: f"C{i}" for i, method in enumerate(methods)}
-    panels = ((axes[0], success, "success rate [%]", title),
-              (axes[1], seen, "target seen so far [%]", "Has the question's target been in view?"))
-    for ax, rates, ylabel, heading in panels:
-        for method, curve in rates.by_method.items():
-            ax.plot(taus, 100 * curve, marker="o", ms=3, lw=2, color=colours[method],
-                    label=f"{method} (n={rates.counts[method]})")
+    for ax, panel in zip(axes.ravel(), panels):
+        scale = 100 if panel.percent else 1
+        for method, curve in panel.rates.by_method.items():
+            ax.plot(taus, scale * curve, marker="o", ms=3, lw=2, color=colours[method],
+                    label=f"{method} (n={panel.rates.counts[method]})")
         ax.set_xlabel("normalised time step (steps / budget)")
-        ax.set_ylabel(ylabel)
+        ax.set_ylabel(panel.ylabel)
         ax.set_xlim(0, 1)
-        ax.set_ylim(0, 100)
+        if panel.percent:
+            ax.set_ylim(0, 100)
+        else:
+            ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
-        ax.set_title(heading, fontsize=10)
+        ax.set_title(panel.heading, fontsize=10)
         ax.legend(loc="lower right", fontsize=8)
+    for ax in axes.ravel()[len(panels):]:
+        ax.set_visible(False)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from agent.config import Config
-from agent.eval.curves import TAU_GRID, plot_curves, success_curves, target_seen_curves, write_curves_csv
+from agent.eval.curves import TAU_GRID, Rates, explore_panels, plot_curves, write_curves_csv
 from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from worlds.suite import read_suite
 
@@ -41,10 +41,16 @@ def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: in
     results = results_for(jobs, results_path)
     for result in results:
         result["method"] = result["variant"]
-    success, seen = success_curves(results), target_seen_curves(results)
-    write_curves_csv(out_dir / "curves.csv", success, seen)
-    plot_curves(out_dir / "curves.png", success, seen, f"Exploration methods on {suite.name}")
+    panels = explore_panels(results, f"Exploration methods on {suite.name}")
+    write_curves_csv(out_dir / "curves.csv", panels)
+    plot_curves(out_dir / "curves.png", panels)
+    success, seen, floor, rooms = (panel.rates for panel in panels)
     failed = sum(r["status"] == "failed" for r in results)
-    return {"curves": {m: c.tolist() for m, c in success.by_method.items()}, "taus": TAU_GRID.tolist(),
-            "counts": success.counts, "target_seen": {m: c.tolist() for m, c in seen.by_method.items()},
-            "target_seen_counts": seen.counts, "failed": failed, "results": str(results_path)}
+    return {"curves": _lists(success), "taus": TAU_GRID.tolist(), "counts": success.counts,
+            "target_seen": _lists(seen), "target_seen_counts": seen.counts,
+            "floor_seen": _lists(floor), "rooms_entered": _lists(rooms), "reported_counts": floor.counts,
+            "failed": failed, "results": str(results_path)}
+
+
+def _lists(rates: Rates) -> dict[str, list[float]]:
+    return {method: curve.tolist() for method, curve in rates.by_method.items()}
