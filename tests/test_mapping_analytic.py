@@ -116,3 +116,17 @@ def test_floor_seen_far_away_at_a_grazing_angle_is_free() -> None:
     cells = world_map.spec.to_cell(far)
     share = world_map.free[cells[:, 0], cells[:, 1]].mean()
     assert len(far) > 1000 and share >= 0.98, f"{share:.0%} of the floor seen 3-6 m away is free"
+
+
+def test_what_lies_beyond_the_tsdf_range_stays_unexplored_so_the_hall_keeps_its_frontier() -> None:
+    """Floor seen farther than the TSDF integrates (6 m) never turns free: were it explored, the
+    frontier down the hall would vanish and the robot would think the hall done."""
+    hall = BoxRoom((0.0, 0.0, 12.0, 4.0), walls_with_doorway(0.0, 0.0, 12.0, 4.0, (4.0, 4.0)))
+    start = (0.6, 2.0)
+    world_map = ExplorationMap(start, OccupancyConfig(size_m=30))
+    survey(hall, world_map, start, headings=1)
+    beyond = _cell_centres(world_map)[..., 0] > start[0] + world_map.config.tsdf.depth_max + 0.2
+    assert not (world_map.explored & beyond).any(), "cells beyond the TSDF's range are marked explored"
+    frontiers = reachable_frontiers(world_map, start).frontiers
+    ahead = [f for f in frontiers if f.normal @ np.array([1.0, 0.0]) > 0.9]
+    assert ahead, "no frontier faces on down the hall"

@@ -5,8 +5,8 @@
   through it;
 - floor seen: a column holds a surface voxel at floor height;
 - free: floor seen and not occupied, or near a pose the robot has stood on;
-- explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows), or
-  near a pose the robot has stood on.
+- explored: hit by a narrow-view ray (the middle half of the columns, lower half of the rows)
+  within the TSDF's range, or near a pose the robot has stood on.
 
 "Near a pose" is the head camera's blind zone (``near_field_radius``): the floor closer than the
 lower edge of the image is never in view, yet the robot has just been there. Counting it as free
@@ -109,10 +109,13 @@ class ExplorationMap:
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
                   robot_xy: tuple[float, float]) -> None:
         """Fuse one frame taken with the robot at ``robot_xy``."""
-        self.tsdf.integrate(depth, intrinsics, camera_to_world)
-        points = back_project(depth, intrinsics, camera_to_world)
-        narrow = narrow_view_mask(*depth.shape)[depth > 0]
         config = self.config
+        self.tsdf.integrate(depth, intrinsics, camera_to_world)
+        # Only what the TSDF takes in may count as explored: a cell seen beyond its range could
+        # never turn free, and a frontier that reaches it would vanish for good.
+        in_range = (depth > 0) & (depth <= config.tsdf.depth_max)
+        points = back_project(depth, intrinsics, camera_to_world, in_range)
+        narrow = narrow_view_mask(*depth.shape)[in_range]
         at_height = (points[:, 2] >= config.obstacle_min_z) & (points[:, 2] <= config.obstacle_max_z)
         self._mark(self.obstacle_hits, points[at_height])
         self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), config)
