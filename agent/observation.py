@@ -20,23 +20,25 @@ class ObservationError(ValueError):
 
 @dataclass(frozen=True)
 class InstanceLabel:
-    """What the camera can tell about one instance in view.
+    """What the camera can tell about one instance in view: what it is and looks like.
 
     ``state`` is a visible state (a lamp "on", a door "open"); ``inside`` names the kind of storage
-    the instance sits in when that is visible (a carton seen in an open fridge: "fridge").
+    the instance sits in when the frame shows that storage's interior around it (a carton seen in
+    an open fridge: "fridge"). Which room a thing stands in is no label: no camera sees a room's
+    name, so the agent and the simulated VLM work it out from what stands in view
+    (`agent.perception.rooms`).
     """
 
     id: int
     category: str
     colour: str
-    room: str
     state: str | None = None
     inside: str | None = None
 
     @classmethod
     def from_meta(cls, entry: dict) -> InstanceLabel:
         optional = {key: (str(entry[key]) if entry.get(key) is not None else None) for key in ("state", "inside")}
-        return cls(int(entry["id"]), str(entry["category"]), str(entry["colour"]), str(entry["room"]), **optional)
+        return cls(int(entry["id"]), str(entry["category"]), str(entry["colour"]), **optional)
 
 
 @dataclass(frozen=True)

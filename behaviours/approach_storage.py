@@ -6,10 +6,10 @@ doorway leaves no frontier near it, so nothing draws the robot back, and a front
 step towards the room the question names may be dropped for another the next step. This leaf,
 tried before a frontier is chosen, keeps to one goal over several steps:
 
-1. a piece of the named kind (in the named room) seen from as far as 8 m
-   (`agent.perception.sightings`): the step's move goes towards a viewpoint of the nearest one
-   not dealt with yet (`agent.planning.viewpoint`), about 1.6 m from it, in plain view, reachable
-   over the map. From there the next step's frame shows its front, and the act branch opens it.
+1. a piece of the named kind seen from as far as 8 m (`agent.perception.sightings`), not seen in
+   another room than the named one: the step's move goes towards a viewpoint of the nearest one
+   not dealt with yet (pieces seen in the named room first; `agent.planning.viewpoint`), about
+   1.6 m from it, in plain view, reachable over the map. From there the next step's frame shows its front, and the act branch opens it.
    A piece is dealt with once the act branch has tried to open it (an act record within
    ``done_m`` of it), once it has been looked at from ``views`` sides, or after ``max_moves`` moves
    towards it (a path that keeps being cut short or blocked);
@@ -17,6 +17,10 @@ tried before a frontier is chosen, keeps to one goal over several steps:
    on it yet (within ``entered_m``): towards the middle of what was seen of it
    (`agent.planning.room_goal`), for at most ``max_moves`` moves. Inside, frontier exploration
    goes on, valued towards the room by the VLM.
+
+Which room a piece or a floor is in is what the frames showed of it: the furniture standing there
+(`agent.perception.rooms`; a toilet, a bathroom). Only a room's kind shows this way, so "the
+second bedroom" is looked for as a bedroom.
 
 Both kinds of move may squeeze through gaps the map draws a little narrower than the robot
 (``squeeze_m``): the doorway the room was seen through, typically. It fails, saying why, when there
@@ -36,11 +40,13 @@ from agent import blackboard as bb
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.mapping.occupancy import ExplorationMap
 from agent.observation import Observation
+from agent.perception.rooms import floor_points, read_rooms
 from agent.perception.sightings import SightingConfig, Sightings, storage_centres
 from agent.planning.explore import ExploreConfig
-from agent.planning.room_goal import RoomFloor, room_entry, room_floor_points
+from agent.planning.room_goal import RoomFloor, room_entry
 from agent.planning.route import Routes, routes_from, step_towards
 from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint
+from worlds.vocabulary import room_kind
 
 #: More than the map's surface band, a squeeze would send the base at walls it has seen.
 MAX_SQUEEZE_M = 0.15
@@ -115,36 +121,39 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
             self._seen = observation
             self._note(observation, kind, room, world_map)
         routes = routes_from(world_map, np.asarray(observation.base_pose[:2]), self.explore, self.config.squeeze_m)
-        if self._to_piece(kind, routes, world_map) or self._to_room(room, routes):
+        if self._to_piece(kind, room, routes, world_map) or self._to_room(room, routes):
             return Status.SUCCESS
         return Status.FAILURE
 
     def _note(self, observation: Observation, kind: str, room: str | None, world_map: ExplorationMap) -> None:
         """What this frame shows of the named storage and room; whether the robot stands in the room."""
-        self.sightings.add(storage_centres(observation, kind, room, self.config.sightings))
+        self.sightings.add(storage_centres(observation, kind, self.config.sightings))
         self.progress += [_Progress() for _ in range(len(self.sightings.pieces) - len(self.progress))]
         if room is None:
             return
         if self.floor is None:
             self.floor = RoomFloor(world_map.spec)
-        self.floor.add(room_floor_points(observation, room, self.config.sightings.max_depth_m))
+        self.floor.add(floor_points(observation, read_rooms(observation), room_kind(room),
+                                    self.config.sightings.max_depth_m))
         self.entered |= self.floor.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
 
-    def _to_piece(self, kind: str, routes: Routes, world_map: ExplorationMap) -> bool:
-        """Plan the move towards a view of the nearest piece still to be looked at; whether it did."""
+    def _to_piece(self, kind: str, room: str | None, routes: Routes, world_map: ExplorationMap) -> bool:
+        """Plan the move towards a view of the nearest piece still to be looked at, seen in the
+        named room or in a room nothing told, those in the named room first; whether it did."""
         acts = self.blackboard.get(bb.ACTS) if self.blackboard.exists(bb.ACTS) else []
+        named = None if room is None else room_kind(room)
         choices = []
-        for index in range(len(self.progress)):
-            if self._dealt_with(index, acts):
+        for index, piece in enumerate(self.sightings.pieces):
+            if self._dealt_with(index, acts) or piece.room not in (None, named):
                 continue
-            viewpoint = choose_viewpoint(routes, world_map.occupied, self.sightings.pieces[index].xy,
-                                         self.progress[index].tried, self.config.viewpoint)
+            viewpoint = choose_viewpoint(routes, world_map.occupied, piece.xy, self.progress[index].tried,
+                                         self.config.viewpoint)
             if viewpoint is not None:
-                choices.append((viewpoint.path_m, index, viewpoint))
+                choices.append((piece.room != named, viewpoint.path_m, index, viewpoint))
         if not choices:
             self.feedback_message = f"no {kind} seen that is still to be looked at and can be reached"
             return False
-        _, index, viewpoint = min(choices, key=lambda c: c[:2])
+        _, _, index, viewpoint = min(choices, key=lambda c: c[:3])
         plan, arrives = step_towards(routes, viewpoint.xy, viewpoint.yaw, self.explore.max_step_m)
         progress = self.progress[index]
         progress.moves += 1

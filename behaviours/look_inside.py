@@ -3,8 +3,9 @@
 A question such as "Is there any milk carton in the fridge in the kitchen?" cannot be answered by
 looking: the evidence is behind a door. When the question asks what is *in* or *inside* a kind of
 storage, and a piece of that kind with a handle on a door or drawer has been seen within
-``reach_m`` of the robot (in the room the question names, when the frame says which room a piece
-stands in; pieces seen in another room are left alone), this behaviour has the robot
+``reach_m`` of the robot (in the room the question names, when the frames showed which room a
+piece stands in: the furniture around it, `agent.perception.rooms`; pieces seen in another room
+are left alone), this behaviour has the robot
 (`agent.acsg.robot.Robot`) drive to a stand clear of what the opening sweeps (`skills.stand`),
 along a path over the robot's map, open one of its doors or drawers, take frames while it stands
 open (a door held open by its handle, looked at with the head camera, then pushed shut from the
@@ -49,12 +50,14 @@ from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
 from agent.perception.geometry import GeometryError
 from agent.perception.memory import STORAGE_CATEGORIES, Instance, InstanceMemory, MemoryConfig
+from agent.perception.rooms import read_rooms
 from agent.planning.route import Routes, routes_from
 from agent.runtime.world_link import WorldLink
 from agent.vlm.mosaic import side_by_side
 from behaviours.approach_storage import ApproachConfig
 from skills.plan import SkillPlanError
 from skills.stand import StandConfig
+from worlds.vocabulary import room_kind
 
 log = logging.getLogger(__name__)
 
@@ -120,7 +123,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
         self.blackboard.register_key(bb.ACTS, access=Access.WRITE)
         self.memory = InstanceMemory(MemoryConfig(part_gap_m=PART_GAP_M))
-        self.rooms: dict[int, str] = {}  # storage piece (memory id) -> the room its label named
+        self.rooms: dict[int, str] = {}  # storage piece (memory id) -> the room kind a frame showed it in
         self.tried: set[int] = set()
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
         self._future: Future[_Outcome] | None = None
@@ -169,9 +172,12 @@ class LookInside(py_trees.behaviour.Behaviour):
         return Status.SUCCESS if outcome.views else Status.FAILURE
 
     def _integrate(self, observation: Observation) -> None:
-        """The frame into the memory, and the room of every storage piece it labels."""
+        """The frame into the memory, and the room kind of every storage piece it shows standing
+        in a room that something in view names."""
         update = self.memory.integrate(observation)
-        rooms = {label.id: label.room for label in observation.labels if label.category in STORAGE_CATEGORIES}
+        reading = read_rooms(observation)
+        rooms = {label.id: room for label in observation.labels if label.category in STORAGE_CATEGORIES
+                 and (room := reading.room_of(label.id)) is not None}
         for key in (*update.created, *update.updated):
             inst = self.memory.get(key)
             if inst.hint in rooms:
@@ -179,7 +185,9 @@ class LookInside(py_trees.behaviour.Behaviour):
 
     def _next_part(self, kind: str, room: str | None, base_pose: tuple[float, float, float]) -> Instance | None:
         """The first unopened part with a handle (`_untried_part`) of the nearest piece of ``kind``
-        within reach, pieces labelled in ``room`` first and pieces labelled in another room never."""
+        within reach, pieces seen in a room of ``room``'s kind first and pieces seen in a room of
+        another kind never."""
+        room = None if room is None else room_kind(room)
         here = np.asarray(base_pose[:2], dtype=float)
         pieces = []
         for piece in self.memory.with_label(kind):
@@ -195,8 +203,8 @@ class LookInside(py_trees.behaviour.Behaviour):
 
     def _untried_part(self, piece_id: int) -> Instance | None:
         """A door or drawer with a handle seen on it, not tried yet and not gone, of the piece or of
-        a piece of its kind that the memory keeps apart from it within `SIBLING_M` and no other
-        room's label (one piece seen in fragments: a wardrobe's two doors on two carcasses)."""
+        a piece of its kind that the memory keeps apart from it within `SIBLING_M` and not seen in
+        another room (one piece seen in fragments: a wardrobe's two doors on two carcasses)."""
         piece = self.memory.get(piece_id)
         room = self.rooms.get(piece.id)
         pieces = [piece, *(other for other in self.memory.with_label(piece.label) if other.id != piece.id

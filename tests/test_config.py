@@ -136,10 +136,10 @@ hfov_deg = 70
 listen = ["tcp/127.0.0.1:7000"]
 
 [map]
-resolution = 0.05
+resolution = 0.1
 
 [map.tsdf]
-voxel_size = 0.04
+voxel_size = 0.05
 
 [vlm.sim]
 skill = 0.5
@@ -148,7 +148,7 @@ skill = 0.5
     config = load_config(path)
     assert config.camera.width == 640 and config.camera.hfov_deg == 70.0
     assert config.bus.listen == ("tcp/127.0.0.1:7000",)
-    assert config.map.resolution == 0.05 and config.map.tsdf.voxel_size == 0.04
+    assert config.map.resolution == 0.1 and config.map.tsdf.voxel_size == 0.05
     assert config.vlm.sim.skill == 0.5
     # overrides come after the file
     assert load_config(path, ["camera.width=1024"]).camera.width == 1024

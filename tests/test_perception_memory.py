@@ -191,7 +191,7 @@ def test_an_observation_object_is_accepted_as_it_comes() -> None:
     from agent.observation import InstanceLabel, Observation
 
     depth, seg, labels = render(SCENE, VIEW_A)
-    entries = tuple(InstanceLabel(i, c, "white", "") for i, c in sorted(labels.items()))
+    entries = tuple(InstanceLabel(i, c, "white") for i, c in sorted(labels.items()))
     rgb = np.zeros((INTRINSICS.height, INTRINSICS.width, 3), np.uint8)
     observation = Observation(rgb, depth, seg, entries, INTRINSICS, VIEW_A, (0.0, -0.9, 0.0))
     memory = InstanceMemory()

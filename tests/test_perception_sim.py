@@ -39,7 +39,7 @@ def scene(client: int) -> tuple[int, list[StorageBody], dict]:
     for k, (model, size) in enumerate((("nightstand", (0.45, 0.35, 0.5)), ("cabinet", (0.45, 0.33, 0.45)))):
         placement = StoragePlacement(k + 1, storage_model(model, np.random.default_rng(k + 1), size),
                                      (x + size[0] / 2, 0.4, 0.0, 0.0), 100 + 10 * k)
-        label = {"id": k + 1, "category": model, "colour": "white", "room": ""}
+        label = {"id": k + 1, "category": model, "colour": "white"}
         piece, labels = add_storage(client, placement, label)
         pieces.append(piece)
         seg.update(labels)

@@ -12,7 +12,7 @@ from worlds.freespace import clearance
 from worlds.home import HomeSpec, generate_home
 from worlds.questions import CATEGORY_SHARES, parse_question
 from worlds.scenario import START_CLEARANCE, Scenario, make_scenario
-from worlds.vocabulary import LETTERS, PAD_CHOICE
+from worlds.vocabulary import LETTERS, PAD_CHOICE, ROOM_TYPES, room_kind
 
 SEEDS = range(120)
 
@@ -93,6 +93,22 @@ def test_hidden_questions_ask_about_closed_storage(hidden_cases) -> None:
         assert storage.storage is not None and not facts.is_open(storage), scenario.question
     answers = Counter(s.answer_text for _, s in hidden_cases if s.asks == "yes/no")
     assert answers["Yes"] >= 3 and answers["No"] >= 3
+
+
+def test_questions_name_only_rooms_a_camera_can_pick_out(cases, hidden_cases) -> None:
+    """A camera tells a bedroom by its bed, never the first bedroom from the second: a question
+    names only rooms whose kind the home has once, by that kind, and room choices differ in kind."""
+    asked_in_homes_with_repeats = 0
+    for home, scenario in cases + hidden_cases:
+        kinds = Counter(room.kind for room in home.rooms)
+        asked_in_homes_with_repeats += max(kinds.values()) > 1
+        named = scenario.target["room"] or (scenario.answer_text if scenario.asks == "room" else None)
+        if named is not None:
+            [room] = [r for r in home.rooms if r.name == named]
+            assert kinds[room.kind] == 1 and room.name == room.kind, scenario.question
+        if scenario.asks == "room":
+            assert len({room_kind(c) for c in scenario.choices}) == 4 and all(c in ROOM_TYPES for c in scenario.choices)
+    assert asked_in_homes_with_repeats >= 20  # homes with a second bedroom still get questions
 
 
 def test_categories_come_in_about_the_papers_proportions(cases) -> None:

@@ -179,17 +179,17 @@ _CAMERA = CameraConfig(width=160, height=120, hfov_deg=70.0, mount_height_m=1.3,
 def _scene_with_hidden_mug(client: int, name: str, slot_of: str) -> tuple[StoragePlacement, int, dict]:
     model = _model(name, 3)
     placement = StoragePlacement(2, model, (0.0, 0.0, 0.0, 0.0), 10)
-    carcass = {"id": 2, "category": name, "colour": "white", "room": "kitchen"}
+    carcass = {"id": 2, "category": name, "colour": "white"}
     piece, labels = add_storage(client, placement, carcass)
     floor = add_box(client, (0.0, 0.0, -0.01), (6.0, 6.0, 0.02), (0.5, 0.5, 0.5, 1.0))
-    labels[(floor, -1)] = {"id": 1, "category": "floor", "colour": "blue", "room": "kitchen"}
+    labels[(floor, -1)] = {"id": 1, "category": "floor", "colour": "blue"}
     slot = next(s for s in model.slots if s.access == next(p_.name for p_ in model.parts if p_.kind == slot_of))
     spot = placement.slot_spot(slot.name, 0.04)
     shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=[0.04] * 3, physicsClientId=client)
     visual = p.createVisualShape(p.GEOM_BOX, halfExtents=[0.04] * 3, rgbaColor=(0.9, 0.1, 0.1, 1),
                                  physicsClientId=client)
     mug = p.createMultiBody(0.0, shape, visual, spot.tolist(), physicsClientId=client)
-    labels[(mug, -1)] = {"id": 99, "category": "mug", "colour": "red", "room": "kitchen"}
+    labels[(mug, -1)] = {"id": 99, "category": "mug", "colour": "red"}
     return placement, piece.body, labels
 
 

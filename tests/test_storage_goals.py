@@ -15,7 +15,7 @@ from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import InstanceLabel, Observation
 from agent.planning.paths import path_length
-from agent.planning.room_goal import RoomFloor, room_entry, room_floor_points
+from agent.planning.room_goal import RoomFloor, room_entry
 from agent.planning.route import routes_from, step_towards
 from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint, in_plain_view
 from behaviours.approach_storage import ApproachConfig, ApproachStorage
@@ -123,22 +123,6 @@ def test_a_room_seen_but_out_of_reach_is_approached_as_near_as_the_map_allows() 
     assert room_entry(routes, RoomFloor(world_map.spec)) is None  # nothing seen of it: nowhere to go
 
 
-def test_the_floor_of_the_named_room_is_read_off_the_frame() -> None:
-    height, width = 40, 40
-    seg = np.full((height, width), -1, dtype=np.int32)
-    seg[20:, :20], seg[20:, 20:] = 1, 2
-    depth = np.full((height, width), 2.0, dtype=np.float32)
-    depth[38, :] = 9.0  # beyond the range a floor point is trusted at
-    camera = np.array([[0.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]])
-    labels = (InstanceLabel(1, "floor", "grey", "bathroom"), InstanceLabel(2, "floor", "grey", "hallway"))
-    observation = Observation(np.zeros((height, width, 3), np.uint8), depth, seg, labels,
-                              Intrinsics(width, height, 20.0, 20.0, 20.0, 20.0), camera, (0.0, 0.0, 0.0))
-    points = room_floor_points(observation, "bathroom", max_depth_m=8.0)
-    assert len(points) == 10 * 10 - 10  # every other row and column of the left half, less the far row
-    assert np.all(points[:, 1] > 0)  # the image's left half lies to the camera's left
-    assert len(room_floor_points(observation, "kitchen", max_depth_m=8.0)) == 0
-
-
 @pytest.fixture
 def board() -> py_trees.blackboard.Client:
     client = py_trees.blackboard.Client(name="test")
@@ -152,14 +136,19 @@ def board() -> py_trees.blackboard.Client:
 LOOKING_NORTH = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, -2.0], [0.0, -1.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]])
 
 
-def _looking_north(label: InstanceLabel, distance: float) -> Observation:
-    """A frame from (0, -2) with ``label`` straight ahead at ``distance`` and nothing else in view."""
+def _looking_north(*things: tuple[InstanceLabel, tuple[int, int, int, int]], distance: float) -> Observation:
+    """A frame from (0, -2) with the things, (label, (row, col, height, width)) boxes drawn in
+    order, ``distance`` straight ahead, and nothing else in view."""
     height, width = 60, 80
     seg = np.full((height, width), -1, dtype=np.int32)
-    seg[25:35, 35:45] = label.id
+    for label, (row, col, h, w) in things:
+        seg[row: row + h, col: col + w] = label.id
     depth = np.where(seg >= 0, distance, 0.0).astype(np.float32)
-    return Observation(np.zeros((height, width, 3), np.uint8), depth, seg, (label,),
+    return Observation(np.zeros((height, width, 3), np.uint8), depth, seg, tuple(label for label, _ in things),
                        Intrinsics(width, height, 40.0, 40.0, 40.0, 30.0), LOOKING_NORTH, (0.0, -2.0, math.pi / 2))
+
+
+AHEAD = (25, 35, 10, 10)
 
 
 def _tick(behaviour: ApproachStorage) -> Status:
@@ -170,7 +159,7 @@ def _tick(behaviour: ApproachStorage) -> Status:
 def test_the_robot_heads_for_a_view_of_the_named_storage_seen_afar_until_it_was_tried(board) -> None:
     board.set(bb.QUESTION, "What is inside the cabinet in the bathroom?")
     board.set(bb.MAP, _map(_cabinet_at_the_north_wall))
-    board.set(bb.OBSERVATION, _looking_north(InstanceLabel(5, "cabinet", "white", "bathroom"), 4.7))
+    board.set(bb.OBSERVATION, _looking_north((InstanceLabel(5, "cabinet", "white"), AHEAD), distance=4.7))
     board.set(bb.ACTS, [])
     behaviour = ApproachStorage()
     assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
@@ -184,10 +173,27 @@ def test_the_robot_heads_for_a_view_of_the_named_storage_seen_afar_until_it_was_
     assert "no cabinet seen that is still to be looked at" in behaviour.feedback_message
 
 
+def test_a_piece_seen_in_another_room_than_the_named_one_is_left_alone(board) -> None:
+    """The cabinet stands on a floor with a stove: a kitchen's cabinet, not the bathroom's."""
+    board.set(bb.QUESTION, "What is inside the cabinet in the bathroom?")
+    board.set(bb.MAP, _map(_cabinet_at_the_north_wall))
+    floor, stove = InstanceLabel(1, "floor", "grey"), InstanceLabel(2, "stove", "white")
+    board.set(bb.OBSERVATION, _looking_north((floor, (30, 20, 20, 40)), (InstanceLabel(5, "cabinet", "white"), AHEAD),
+                                             (stove, (25, 50, 10, 8)), distance=4.7))
+    behaviour = ApproachStorage()
+    assert _tick(behaviour) == Status.FAILURE and "no cabinet seen" in behaviour.feedback_message
+    assert behaviour.sightings.pieces[0].room == "kitchen"
+
+
 def test_with_no_piece_seen_the_robot_heads_into_the_named_room_seen_afar(board) -> None:
+    """A floor 4 m ahead with a toilet standing on it: a bathroom's floor, although nothing names it."""
     board.set(bb.QUESTION, "What is inside the cabinet in the bathroom?")
     board.set(bb.MAP, _map(lambda x, y: np.zeros_like(x, dtype=bool)))
-    board.set(bb.OBSERVATION, _looking_north(InstanceLabel(1, "floor", "grey", "bathroom"), 4.0))
+    floor, toilet = InstanceLabel(1, "floor", "grey"), InstanceLabel(2, "toilet", "white")
+    board.set(bb.OBSERVATION, _looking_north((floor, AHEAD), distance=4.0))
+    behaviour = ApproachStorage()
+    assert _tick(behaviour) == Status.FAILURE  # a floor, but nothing says it is the bathroom's
+    board.set(bb.OBSERVATION, _looking_north((floor, AHEAD), (toilet, (18, 38, 9, 5)), distance=4.0))
     behaviour = ApproachStorage()
     assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
     assert "into the bathroom" in behaviour.feedback_message

@@ -13,8 +13,8 @@ from agent.vlm.protocol import VisualQuery
 from agent.vlm.sim import SimParams, SimulatedVLM
 from worlds.vocabulary import LETTERS, PAD_CHOICE
 
-CABINET = InstanceLabel(3, "cabinet", "white", "bathroom", state="open")
-HAMMER = InstanceLabel(9, "hammer", "grey", "bathroom", inside="cabinet")
+CABINET = InstanceLabel(3, "cabinet", "white", state="open")
+HAMMER = InstanceLabel(9, "hammer", "grey", inside="cabinet")
 
 
 def view(height: int, width: int, boxes: list[tuple[InstanceLabel, tuple[int, int, int, int]]],
@@ -30,9 +30,9 @@ def view(height: int, width: int, boxes: list[tuple[InstanceLabel, tuple[int, in
 
 
 def test_views_are_put_side_by_side_each_thing_labelled_as_it_shows_most() -> None:
-    left_door = InstanceLabel(4, "door", "white", "bathroom", state="open")
+    left_door = InstanceLabel(4, "door", "white", state="open")
     first = view(40, 60, [(CABINET, (0, 0, 40, 30)), (left_door, (0, 30, 40, 5))])
-    second = view(30, 50, [(CABINET, (0, 0, 30, 20)), (InstanceLabel(4, "door", "white", "bathroom"), (0, 20, 30, 20)),
+    second = view(30, 50, [(CABINET, (0, 0, 30, 20)), (InstanceLabel(4, "door", "white"), (0, 20, 30, 20)),
                            (HAMMER, (10, 40, 5, 8))], pose=(1.0, 2.0, 0.5))
     both = side_by_side([first, second])
     assert both.rgb.shape == (40, 110, 3) and both.depth.shape == both.segmentation.shape == (40, 110)

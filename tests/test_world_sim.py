@@ -10,7 +10,7 @@ import pytest
 
 from worlds.robot import ROBOT_RADIUS, CameraConfig
 from worlds.sim import MAX_STEP, World
-from worlds.storage import home_part_labels
+from worlds.storage import home_part_labels, home_storage
 from worlds.things import point_rect_distance
 
 
@@ -146,3 +146,25 @@ def test_set_part_state_rejects_what_is_not_there(sim: World) -> None:
         sim.set_part_state(piece.instance_id, part.name, part.upper + 0.1)
     with pytest.raises(ValueError, match="furniture_id"):
         sim.set_part_state(plain.instance_id if plain else 10_000, part.name, 0.0)
+
+
+def test_inside_is_said_only_where_the_frame_shows_the_open_storage_around_the_thing(sim: World) -> None:
+    """A camera sees that a thing is in a drawer only when the drawer stands open and the drawer
+    or its piece is in the same frame; a thing glimpsed alone, or behind a part shut since, is just
+    a thing."""
+    piece_id, drawer, item_id = _home_with_something_in_a_drawer(sim)
+    piece = next(f for f in sim.home.furniture if f.instance_id == piece_id)
+    [placement] = [p for p in home_storage(sim.home) if p.furniture_id == piece_id]
+    drawer_id = placement.part_ids()[drawer]
+    label = sim.home.labels()[item_id]
+    shut = sim.part_states()
+    sim.set_part_state(piece_id, drawer, piece.storage.part(drawer).upper)
+    opened = sim.part_states()
+
+    def inside(joints: dict, in_frame: set[int]) -> str | None:
+        return sim._visible_facts(label, joints, in_frame).get("inside")
+
+    assert inside(opened, {item_id, piece_id}) == piece.category
+    assert inside(opened, {item_id, drawer_id}) == piece.category  # looking down into the drawer
+    assert inside(opened, {item_id}) is None  # the storage is out of the frame
+    assert inside(shut, {item_id, piece_id, drawer_id}) is None  # shut

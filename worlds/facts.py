@@ -25,12 +25,20 @@ class HomeFacts:
 
     def storage_of(self, item: Item) -> Furniture | None:
         """The storage furniture ``item`` is (directly or through its containers) inside, if any."""
+        access = self.access_of(item)
+        return None if access is None else access[0]
+
+    def access_of(self, item: Item) -> tuple[Furniture, str] | None:
+        """The storage piece ``item`` is (directly or through its containers) inside, and the part
+        (door, drawer or flap) that opens the slot it sits in; None when it is in no storage."""
         current: Item | None = item
         while current is not None and current.relation == "inside":
             parent = current.parent
             if parent in self.furniture:
                 found = self.furniture[parent]
-                return found if found.storage is not None else None
+                if found.storage is None or current.slot is None:
+                    return None
+                return found, found.storage.slot(current.slot).access
             current = self.items.get(parent)
         return None
 

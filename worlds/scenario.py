@@ -3,7 +3,10 @@
 The question's category is drawn with the paper's shares (`questions.CATEGORY_SHARES`), then a
 template of that category the home can ask unambiguously: 'What colour is the mug in the kitchen?'
 needs exactly one mug in the kitchen that can be seen, 'Is there any milk carton in the fridge in
-the kitchen?' exactly one closed fridge in the kitchen. Only hidden-evidence templates ask about
+the kitchen?' exactly one closed fridge in the kitchen. A camera tells a room's kind by what stands
+in it, never which of two bedrooms it is, so a question names, and a location question answers
+with, only rooms whose kind the home has once (`nameable_rooms`), by that kind; room choices are
+all different kinds. Only hidden-evidence templates ask about
 what is out of sight; the others count and name only what looking can find. Four choices, padded
 with `PAD_CHOICE` when fewer are real, shuffled except yes/no, on/off and open/closed, and counts,
 which stay in their natural order. Draws come from a generator seeded with (seed, 1), a stream
@@ -138,12 +141,21 @@ def _words_but(rng: np.random.Generator, words: list[str], answer: str, preferre
     return chosen
 
 
+def nameable_rooms(home: HomeSpec) -> set[str]:
+    """The rooms a question may name: those whose kind the home has once (and whose name is then
+    that kind). "The bedroom" of a home with two is not a room any camera could pick out."""
+    kinds = Counter(room.kind for room in home.rooms)
+    return {room.name for room in home.rooms if kinds[room.kind] == 1}
+
+
 def _unique_visible(rng: np.random.Generator, facts: HomeFacts, slots: tuple[str, ...],
                     counted: list[Any]) -> Any | None:
-    """A visible object that is the only one among ``counted`` with its values of ``slots``, so a
-    question naming those values has one answer; None when there is none."""
+    """A visible object in a nameable room that is the only one among ``counted`` with its values
+    of ``slots``, so a question naming those values has one answer; None when there is none."""
     counts = Counter(tuple(getattr(thing, slot) for slot in slots) for thing in counted)
-    unique = [o for o in facts.visible_objects() if counts[tuple(getattr(o, slot) for slot in slots)] == 1]
+    rooms = nameable_rooms(facts.home)
+    unique = [o for o in facts.visible_objects()
+              if o.room in rooms and counts[tuple(getattr(o, slot) for slot in slots)] == 1]
     return _pick(rng, unique) if unique else None
 
 
@@ -166,8 +178,11 @@ def _colour_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None
 
 
 def _unique_storage(facts: HomeFacts, closed: bool) -> list:
+    """Storage pieces, closed or open, the only ones of their kind in a nameable room."""
     counts = Counter((f.room, f.category) for f in facts.storage())
-    return [f for f in facts.storage() if counts[(f.room, f.category)] == 1 and facts.is_open(f) != closed]
+    rooms = nameable_rooms(facts.home)
+    return [f for f in facts.storage()
+            if f.room in rooms and counts[(f.room, f.category)] == 1 and facts.is_open(f) != closed]
 
 
 def _inside_storage(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
@@ -190,7 +205,8 @@ def _count_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """How many {plural} are there in the {room}? (all of them in view: none hidden)"""
     counts = Counter((o.room, o.category) for o in facts.home.objects)
     hidden = {(o.room, o.category) for o in facts.home.objects if facts.is_hidden(o)}
-    options = sorted(key for key, n in counts.items() if key not in hidden and n <= MAX_COUNT)
+    rooms = nameable_rooms(facts.home)
+    options = sorted(key for key, n in counts.items() if key not in hidden and n <= MAX_COUNT and key[0] in rooms)
     if not options:
         return None
     room, category = _pick(rng, options)
@@ -203,14 +219,14 @@ def _count_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
 def _exists_in_room(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """Is there a {colour} {category} in the {room}? Yes about a visible object, else a near miss."""
     present = {(o.colour, o.category, o.room) for o in facts.home.objects}
-    visible = sorted({(o.colour, o.category, o.room) for o in facts.visible_objects()})
+    rooms = sorted(nameable_rooms(facts.home))
+    visible = sorted({(o.colour, o.category, o.room) for o in facts.visible_objects() if o.room in rooms})
     if not visible:
         return None
     if rng.random() < 0.5:
         colour, category, room = _pick(rng, visible)
         answer = "Yes"
     else:
-        rooms = [r.name for r in facts.home.rooms]
         for _ in range(100):  # a near miss: a real object with its colour or its room changed
             colour, category, room = _pick(rng, visible)
             if rng.random() < 0.5:
@@ -242,7 +258,8 @@ def _exists_in_storage(rng: np.random.Generator, facts: HomeFacts) -> Draw | Non
 def _power_state(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
     """Is the {appliance} in the {room} on or off?"""
     counts = Counter((f.room, f.category) for f in facts.appliances())
-    options = [f for f in facts.appliances() if counts[(f.room, f.category)] == 1]
+    rooms = nameable_rooms(facts.home)
+    options = [f for f in facts.appliances() if f.room in rooms and counts[(f.room, f.category)] == 1]
     if not options:
         return None
     appliance = _pick(rng, options)
@@ -261,11 +278,12 @@ def _door_state(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
 
 
 def _room_of_object(rng: np.random.Generator, facts: HomeFacts) -> Draw | None:
-    """Which room is the {colour} {category} in? (one such object in the home, visible)"""
+    """Which room is the {colour} {category} in? (one such object in the home, visible, in a
+    nameable room; the other choices are other kinds, those of the home first)"""
     item = _unique_visible(rng, facts, ("colour", "category"), facts.home.objects)
     if item is None:
         return None
-    here = [r.name for r in facts.home.rooms]
+    here = [r.kind for r in facts.home.rooms]
     return {"colour": item.colour, "category": item.category}, item.room, _shuffled(
         rng, item.room, _words_but(rng, list(ROOM_TYPES), item.room, preferred=here))
 

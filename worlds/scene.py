@@ -180,7 +180,7 @@ def add_storage(client: int, placement: StoragePlacement, label: Label) -> tuple
                         COLOURS[handle_colour(colour)])
     links = link_indices(client, body)
     labels: SegLabels = {(body, -1): label}
-    for name, part_label in part_labels(placement, colour, label["room"]).items():
+    for name, part_label in part_labels(placement, colour).items():
         labels[(body, links[name])] = part_label
     return StorageBody(body, placement, links), labels
 

@@ -31,7 +31,7 @@ from worlds.scenario import Scenario, make_scenario
 from worlds.scene import BuiltScene, StorageBody, build_scene, floor_bodies, link_indices, urdf_file
 from worlds.tabletop import build_tabletop
 from worlds.tabletop_scene import TabletopScene
-from worlds.things import Label
+from worlds.things import Furniture, Label
 
 log = logging.getLogger(__name__)
 
@@ -243,11 +243,18 @@ class World:
         finally:
             self.place(pose)
         joints = self.part_states()
-        return replace(frame, labels=[self._visible_facts(label, joints) for label in frame.labels])
+        in_frame = {label["id"] for label in frame.labels}
+        return replace(frame, labels=[self._visible_facts(label, joints, in_frame) for label in frame.labels])
 
-    def _visible_facts(self, label: Label, joints: dict[int, dict[str, float]]) -> Label:
+    def _visible_facts(self, label: Label, joints: dict[int, dict[str, float]], in_frame: set[int]) -> Label:
         """The label with what the camera shows of the thing now: a switch or door ``state``, and
-        the kind of storage it is seen ``inside``. Doors may have moved since the home was built."""
+        the kind of storage it is seen ``inside``. Doors may have moved since the home was built.
+
+        ``inside`` is only given when the frame shows the storage's interior around the thing: the
+        part that opens its slot stands open (past `CLOSED_SHARE` of its travel) and the piece
+        itself, its carcass or that open part, is in the same frame (``in_frame``: the ids of the
+        frame). A carton glimpsed with no fridge in view, or behind a door shut since, is just a
+        carton: a camera cannot tell it is in a fridge."""
         facts, thing_id = self._facts, label["id"]
         if facts is None:  # a tabletop: only its storage has a state
             piece = self._built.storage.get(thing_id)
@@ -264,9 +271,20 @@ class World:
             extra["state"] = next(iter(switches.values()))
         if furniture is not None and furniture.storage is not None:
             extra["state"] = "open" if facts.is_open(furniture, joints=joints[thing_id]) else "closed"
-        if item is not None and (storage := facts.storage_of(item)) is not None:
-            extra["inside"] = storage.category
+        access = facts.access_of(item) if item is not None else None
+        if access is not None and self._interior_in_view(*access, joints, in_frame):
+            extra["inside"] = access[0].category
         return {**label, **extra}
+
+    def _interior_in_view(self, storage: Furniture, part_name: str, joints: dict[int, dict[str, float]],
+                          in_frame: set[int]) -> bool:
+        """Whether a frame with the ids ``in_frame`` shows the inside of ``storage`` behind
+        ``part_name``: that part open now, and the carcass or the part in the frame."""
+        assert self._facts is not None
+        piece = self._built.storage[storage.instance_id]
+        part_id = piece.placement.part_ids()[part_name]
+        opened = self._facts.is_open(storage, part_name, joints=joints[storage.instance_id])
+        return opened and bool(in_frame & {storage.instance_id, part_id})
 
     def contact(self) -> Label | None:
         """The label of what the robot body touches now (the deepest contact), ignoring floors."""

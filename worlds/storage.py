@@ -237,14 +237,14 @@ class StoragePlacement:
         )
 
 
-def part_labels(placement: StoragePlacement, colour: str, room: str) -> dict[str, dict[str, Any]]:
+def part_labels(placement: StoragePlacement, colour: str) -> dict[str, dict[str, Any]]:
     """Link name -> ground-truth label for every part ("door" or "drawer"; flaps are doors) and handle."""
     ids = placement.part_ids()
     labels: dict[str, dict[str, Any]] = {}
     for part in placement.model.parts:
         category = "drawer" if part.kind == "drawer" else "door"
-        labels[part.name] = {"id": ids[part.name], "category": category, "colour": colour, "room": room}
-        handle = {"id": ids[part.handle], "category": "handle", "colour": handle_colour(colour), "room": room}
+        labels[part.name] = {"id": ids[part.name], "category": category, "colour": colour}
+        handle = {"id": ids[part.handle], "category": "handle", "colour": handle_colour(colour)}
         labels[part.handle] = handle
     return labels
 
@@ -275,12 +275,11 @@ def home_storage(home: HomeSpec) -> list[StoragePlacement]:
 
 def home_part_labels(home: HomeSpec) -> dict[int, dict[str, Any]]:
     """Instance id -> label of every storage part and handle in ``home`` (the ids `home_storage` hands out)."""
-    pieces = {piece.instance_id: piece for piece in home.furniture}
+    colours = {piece.instance_id: piece.colour for piece in home.furniture}
     return {
         label["id"]: label
         for placement in home_storage(home)
-        for label in part_labels(placement, pieces[placement.furniture_id].colour,
-                                 pieces[placement.furniture_id].room).values()
+        for label in part_labels(placement, colours[placement.furniture_id]).values()
     }
 
 

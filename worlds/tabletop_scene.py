@@ -34,8 +34,8 @@ def half_extents(shape: str, dims: tuple[float, ...]) -> np.ndarray:
 
 
 def _label(instance_id: int, category: str, colour: str) -> Label:
-    """A tabletop label: the table is no room, so ``room`` is empty."""
-    return {"id": instance_id, "category": category, "colour": colour, "room": ""}
+    """A tabletop label: what the thing looks like, as in a home (`worlds.things`)."""
+    return {"id": instance_id, "category": category, "colour": colour}
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ class TabletopScene:
         for colour, placement in self.storage:
             category = placement.model.model.replace("_", " ")
             labels[placement.furniture_id] = _label(placement.furniture_id, category, colour)
-            labels.update({label["id"]: label for label in part_labels(placement, colour, "").values()})
+            labels.update({label["id"]: label for label in part_labels(placement, colour).values()})
         for obj in self.objects:
             labels[obj.instance_id] = _label(obj.instance_id, obj.category, obj.colour)
         return labels

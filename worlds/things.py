@@ -3,8 +3,9 @@
 Everything stands on a flat floor at z = 0 inside an axis-aligned box (storage furniture is turned
 to face its room by quarter turns, so it still fits one), and every question about free space
 reduces to rectangles in the plane: a `Rect` is ``(xmin, ymin, xmax, ymax)`` in metres. Every
-rendered thing has a stable ``instance_id`` and a label ``{"id", "category", "colour", "room"}``:
-the same label the camera reports for its pixels. worlds.spec turns all of it into JSON and back.
+rendered thing has a stable ``instance_id`` and a label ``{"id", "category", "colour"}``:
+the same label the camera reports for its pixels. A label says what the thing looks like, never
+which room the generator put it in: no camera sees a room's name (a floor is just a floor). worlds.spec turns all of it into JSON and back.
 """
 
 from __future__ import annotations
@@ -52,8 +53,8 @@ def box_footprint(center: tuple[float, ...], size: tuple[float, ...]) -> Rect:
     return (center[0] - size[0] / 2, center[1] - size[1] / 2, center[0] + size[0] / 2, center[1] + size[1] / 2)
 
 
-def _label(instance_id: int, category: str, colour: str, room: str) -> Label:
-    return {"id": instance_id, "category": category, "colour": colour, "room": room}
+def _label(instance_id: int, category: str, colour: str) -> Label:
+    return {"id": instance_id, "category": category, "colour": colour}
 
 
 @dataclass(frozen=True)
@@ -84,7 +85,7 @@ class Room:
         return self.rect[0] <= x <= self.rect[2] and self.rect[1] <= y <= self.rect[3]
 
     def label(self) -> Label:
-        return _label(self.instance_id, "floor", self.floor_colour, self.name)
+        return _label(self.instance_id, "floor", self.floor_colour)
 
 
 @dataclass(frozen=True)
@@ -118,7 +119,7 @@ class Wall:
         return box_footprint(self.center, self.size)
 
     def label(self) -> Label:
-        return _label(self.instance_id, "wall", WALL_COLOUR, "")
+        return _label(self.instance_id, "wall", WALL_COLOUR)
 
 
 @dataclass(frozen=True)
@@ -153,7 +154,7 @@ class Furniture:
         return self.center[2] + self.size[2] / 2
 
     def label(self) -> Label:
-        return _label(self.instance_id, self.category, self.colour, self.room)
+        return _label(self.instance_id, self.category, self.colour)
 
 
 #: Where a small object is: on a furniture top, inside a storage slot or a container object, under
@@ -201,7 +202,7 @@ class Item:
         return (self.center[0] - hx, self.center[1] - hy, self.center[0] + hx, self.center[1] + hy)
 
     def label(self) -> Label:
-        return _label(self.instance_id, self.category, self.colour, self.room)
+        return _label(self.instance_id, self.category, self.colour)
 
 
 def half_extents(category: str) -> tuple[float, float, float]:

@@ -4,7 +4,8 @@ Pure numpy/scipy, no simulator and no bus: frames in, instances and TCP poses ou
 world frame. `memory` fuses segmented RGB-D frames into voxel instances (merge by label and
 overlap, forget by depth test, attach parts to their parents); `geometry` reads a handle and its
 front into a door or drawer and the TCP waypoints that open or close it; `sightings` keeps where
-pieces of one kind of storage were seen, from farther than the memory looks.
+pieces of one kind of storage were seen, from farther than the memory looks; `rooms` reads which
+room each part of a frame shows off the furniture standing there.
 """
 
 from agent.perception.geometry import (

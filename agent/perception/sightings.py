@@ -1,28 +1,29 @@
-"""Where pieces of one kind of storage were seen, as floor positions, from as far as the camera sees.
+"""Where pieces of one kind of storage were seen, as floor positions, from as far as the camera sees,
+and which room each seemed to stand in.
 
 The act branch's instance memory (`behaviours.look_inside`) keeps what it saw within 4 m, the range
 it opens from, at the 1 cm detail grasping needs. A cabinet glimpsed across a room or through a
 doorway is beyond that, yet it is where the robot should go when the question asks what is in it:
 without a note of it, exploration only comes back by chance. `Sightings` is that note: for one kind
-of storage (and one room, when the question names one), the floor position of every piece seen,
-from the pixels each frame labels with that kind, back-projected with their depth.
+of storage, the floor position of every piece seen, from the pixels each frame labels with that
+kind, back-projected with their depth.
 
 Pieces are told apart by position alone (centres nearer than ``merge_m`` are one piece), never by
-the simulator's per-frame segment ids. Which room a piece stands in is the room its label names:
-the world sends that name with every instance (see docs/interactive.md, "What the robot may
-know"), as it does for the floors the simulated VLM reads rooms from. Pure: plain arrays in and
-out, no bus, no tree.
+the simulator's per-frame segment ids. Which room a piece stands in is what the frames showed
+around it (`agent.perception.rooms`: a toilet beside it, a bathroom), summed over every frame that
+saw it; no label names a room. Pure: plain arrays in and out, no bus, no tree.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from agent.mapping.camera import back_project
 from agent.observation import Observation
+from agent.perception.rooms import read_rooms
 
 
 @dataclass(frozen=True)
@@ -44,30 +45,48 @@ class SightingConfig:
             raise ValueError(f"act.approach.sightings.min_pixels: {self.min_pixels} must be at least 1")
 
 
-@dataclass
-class Sighting:
-    """One piece: its floor position ``xy`` (the mean of every pixel that fell on it, so a nearer,
-    larger view counts for more) and ``pixels``, how many did."""
+@dataclass(frozen=True)
+class Centre:
+    """A piece of storage in one frame: its floor position ``xy``, the ``pixels`` it filled, and
+    the room kind the frame shows it standing in (None when nothing in view tells)."""
 
     xy: np.ndarray
     pixels: int
+    room: str | None
 
 
-def storage_centres(observation: Observation, kind: str, room: str | None,
-                    config: SightingConfig = SightingConfig()) -> list[tuple[np.ndarray, int]]:
-    """(floor x, y, pixel count) of each instance this frame labels ``kind`` (standing in ``room``,
-    when given), from its pixels with a depth return within ``config.max_depth_m``."""
+@dataclass
+class Sighting:
+    """One piece: its floor position ``xy`` (the mean of every pixel that fell on it, so a nearer,
+    larger view counts for more), ``pixels``, how many did, and ``rooms``: room kind -> pixels
+    of the frames that showed it standing in a room of that kind."""
+
+    xy: np.ndarray
+    pixels: int
+    rooms: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def room(self) -> str | None:
+        """The room kind most of the frames that told one showed it in; None when none told."""
+        return max(sorted(self.rooms), key=self.rooms.__getitem__, default=None)
+
+
+def storage_centres(observation: Observation, kind: str, config: SightingConfig = SightingConfig()) -> list[Centre]:
+    """Each instance this frame labels ``kind``, from its pixels with a depth return within
+    ``config.max_depth_m``, with the room the frame shows it in."""
     found = []
+    reading = None
     for label in observation.labels:
-        if label.category != kind or (room is not None and label.room != room):
+        if label.category != kind:
             continue
         mask = (observation.segmentation == label.id) & (observation.depth > 0) \
             & (observation.depth <= config.max_depth_m)
         count = int(np.count_nonzero(mask))
         if count < config.min_pixels:
             continue
+        reading = reading or read_rooms(observation)
         points = back_project(observation.depth, observation.intrinsics, observation.camera_to_world, mask)
-        found.append((points[:, :2].mean(axis=0), count))
+        found.append(Centre(points[:, :2].mean(axis=0), count, reading.room_of(label.id)))
     return found
 
 
@@ -78,17 +97,20 @@ class Sightings:
         self.config = config
         self.pieces: list[Sighting] = []
 
-    def add(self, centres: Iterable[tuple[np.ndarray, int]]) -> None:
+    def add(self, centres: Iterable[Centre]) -> None:
         """Merge a frame's centres (`storage_centres`): into the nearest piece within ``merge_m``,
-        as a pixel-weighted mean, else as a new piece."""
-        for xy, pixels in centres:
-            xy = np.asarray(xy, dtype=float)
+        as a pixel-weighted mean, else as a new piece; the room each was seen in is tallied."""
+        for centre in centres:
+            xy = np.asarray(centre.xy, dtype=float)
             near = [(float(np.linalg.norm(p.xy - xy)), i) for i, p in enumerate(self.pieces)]
             distance, index = min(near, default=(np.inf, -1))
             if distance <= self.config.merge_m:
                 piece = self.pieces[index]
-                total = piece.pixels + pixels
-                piece.xy = (piece.xy * piece.pixels + xy * pixels) / total
+                total = piece.pixels + centre.pixels
+                piece.xy = (piece.xy * piece.pixels + xy * centre.pixels) / total
                 piece.pixels = total
             else:
-                self.pieces.append(Sighting(xy, int(pixels)))
+                piece = Sighting(xy, int(centre.pixels))
+                self.pieces.append(piece)
+            if centre.room is not None:
+                piece.rooms[centre.room] = piece.rooms.get(centre.room, 0) + int(centre.pixels)

@@ -4,8 +4,8 @@
 room is where to go. Its floor is often glimpsed early, through a doorway from the hall, and then
 left behind: the semantic values make frontiers towards it likely, not certain, and a frontier
 drawn anew each step may lead elsewhere the next. `RoomFloor` keeps every floor cell of the map
-seen labelled with that room (the world names each floor's room with its label, as it does for
-every instance: docs/interactive.md, "What the robot may know"); `room_entry` picks the place to
+seen that the robot judged to be that room's (`agent.perception.rooms`, from the furniture
+standing on it; no label names a room); `room_entry` picks the place to
 drive to: a cell of that floor the base can reach, the one nearest the middle of what was seen of
 it, else the reachable cell nearest to that floor (the near side of the doorway it was seen
 through). Pure: plain arrays and the map's grid.
@@ -16,26 +16,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from agent.mapping.camera import back_project
 from agent.mapping.grid import GridSpec
-from agent.observation import Observation
 from agent.planning.route import Routes
-
-#: Every this many rows and columns of a frame's floor pixels are back-projected (a 10 cm cell
-#: spans several pixels at any distance that matters).
-_PIXEL_STRIDE = 2
-
-
-def room_floor_points(observation: Observation, room: str, max_depth_m: float) -> np.ndarray:
-    """Floor points (N, 2) of the frame's floor instances labelled ``room``, up to ``max_depth_m`` away."""
-    floors = [label.id for label in observation.labels if label.category == "floor" and label.room == room]
-    if not floors:
-        return np.zeros((0, 2))
-    mask = np.zeros(observation.segmentation.shape, dtype=bool)
-    mask[::_PIXEL_STRIDE, ::_PIXEL_STRIDE] = True
-    mask &= np.isin(observation.segmentation, floors) & (observation.depth > 0) & (observation.depth <= max_depth_m)
-    return back_project(observation.depth, observation.intrinsics, observation.camera_to_world, mask)[:, :2]
-
 
 class RoomFloor:
     """The cells of a grid on which the named room's floor has been seen."""

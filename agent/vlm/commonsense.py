@@ -3,16 +3,15 @@ view shows.
 
 The simulated VLM uses this table to value directions (LSV and GSV in Explore until Confident):
 a view into a kitchen is worth exploring for a mug, a view into a bathroom less so. Read the other
-way, what stands in view says which room it is (`room_cue`): a toilet means a bathroom, a bed a
-bedroom, a mug a kitchen more likely than not. Values are affinities in [0, 1]; a pair not listed
-gets `UNLISTED`.
+way, what stands in view says which room it is (`room_cue`, `room_named_by`): a toilet means a
+bathroom, a bed a bedroom. Values are affinities in [0, 1]; a pair not listed gets `UNLISTED`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-from worlds.vocabulary import room_kind
+from worlds.vocabulary import FURNITURE, room_kind
 
 UNLISTED = 0.15
 
@@ -59,8 +58,8 @@ ROOM_AFFINITY: dict[str, dict[str, float]] = {
     "armchair": {"living room": 0.7, "bedroom": 0.3, "office": 0.3},
     "desk": {"office": 0.85, "bedroom": 0.4},
     "workbench": {"garage": 0.95},
-    "table": {"dining room": 0.7, "kitchen": 0.6},
-    "bench": {"hallway": 0.6, "garage": 0.4},
+    "table": {"dining room": 0.85, "kitchen": 0.6},  # a kitchen's counter and stove say more
+    "bench": {"hallway": 0.85, "garage": 0.4},  # a garage's workbench says more
     "shelf": {"office": 0.5, "living room": 0.5, "hallway": 0.4, "garage": 0.4},
 }
 
@@ -69,6 +68,25 @@ DOORWAY_VALUE = 0.35
 
 #: How much a view of the room the question names is worth ("… in the kitchen?": the kitchen).
 NAMED_ROOM_VALUE = 0.95
+
+#: How much a view of a room nothing in view names is worth: it might be the room looked for.
+UNKNOWN_ROOM = 0.3
+
+
+#: A piece of furniture names the room a view shows when its affinity to that room reaches this:
+#: a bed (0.99) a bedroom, a desk (0.85) an office; a cabinet (0.7 at most) or an armchair say
+#: nothing on their own.
+ROOM_CUE_MIN = 0.85
+
+
+def room_named_by(category: str) -> tuple[str, float] | None:
+    """The room kind a piece of furniture or a fixture of ``category`` says a view shows, with its
+    affinity; None for a weak cue and for small things, which are carried from room to room."""
+    if category not in FURNITURE:
+        return None
+    rooms = ROOM_AFFINITY.get(category, {})
+    kind = max(rooms, key=rooms.__getitem__, default=None)
+    return (kind, rooms[kind]) if kind is not None and rooms[kind] >= ROOM_CUE_MIN else None
 
 
 def affinity(category: str | None, room_name: str) -> float:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from agent.vlm.sim import SimParams
+from agent.vlm.sim_params import SimParams
 
 BACKENDS = ("sim", "openai", "hf")
 
