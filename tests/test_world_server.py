@@ -61,8 +61,7 @@ def test_reset_replies_with_scenario_home_and_pose(world: World) -> None:
     assert reply.meta["home"] == {
         "area_m2": home.area_m2,
         "bounds": list(home.bounds),
-        "rooms": [{"name": r.name, "polygon": r.polygon} for r in home.rooms],
-    }
+    }  # rooms are ground truth: only the episode report, which no behaviour reads, names them
     assert reply.meta["base_pose"] == pytest.approx(scenario["start_pose"])
 
 

@@ -2,7 +2,7 @@
 
 Queryables (all under ``<ns>``, see `agent.bus.keys`):
 
-- ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 4..10} -> scenario, home outline, pose
+- ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 4..10} -> scenario, home size and bounds, pose
                            ({"seed", "tabletop": task} -> a tabletop exploration scene instead)
 - ``world/cmd/observe``    {"camera": "head" | "wrist"} -> pose, camera, labels + arrays rgb (H,W,3
                            uint8), depth (H,W float32 metres, 0 = no return), seg (H,W int32 ids, -1 = nothing)
@@ -125,7 +125,6 @@ class WorldServer:
             "home": {
                 "area_m2": home.area_m2,
                 "bounds": list(home.bounds),
-                "rooms": [{"name": room.name, "polygon": room.polygon} for room in home.rooms],
             },
             "base_pose": list(self._world.base_pose),
         }, {}
