@@ -65,13 +65,16 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             else:
                 index = self._weighted_choice(world_map, candidates)
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
+        earlier_goal = self.blackboard.get(bb.FRONTIER_GOAL)
+        goal = None if plan is None else world_map.spec.to_world(np.asarray(plan.frontier.centre))
         self.blackboard.set(bb.PLAN, plan)
-        self.blackboard.set(bb.FRONTIER_GOAL, None if plan is None else world_map.spec.to_world(
-            np.asarray(plan.frontier.centre)))
+        self.blackboard.set(bb.FRONTIER_GOAL, goal)
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.SUCCESS
-        rule = "sampled by semantic weight" if self.semantic else "Bellman over learned R_A, D" if self.learned else "nearest"
+        kept = earlier_goal is not None and float(np.hypot(*(goal - earlier_goal))) <= self.config.choice.keep_within_m
+        rule = ("Bellman over learned R_A, D" if self.learned else "kept the goal" if kept
+                else "sampled by semantic weight" if self.semantic else "nearest")
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
