@@ -73,8 +73,9 @@ def corridor_map() -> ExplorationMap:
 
 def test_the_tree_s_lfe_method_plans_a_move_toward_a_frontier() -> None:
     board = py_trees.blackboard.Client(name="test")
-    for key in (bb.MAP, bb.OBSERVATION, bb.BUDGET, bb.ANSWER_LOG, bb.PLAN):
+    for key in (bb.MAP, bb.OBSERVATION, bb.BUDGET, bb.ANSWER_LOG, bb.PLAN, bb.FRONTIER_GOAL):
         board.register_key(key, access=Access.WRITE)
+    board.set(bb.FRONTIER_GOAL, None)
     try:
         robot = (-1.0, 0.0, 0.0)
         size = 4
