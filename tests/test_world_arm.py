@@ -30,10 +30,10 @@ SPEC = arm_spec()
 #: sha256 of the head camera's frames (rgb, depth, seg, camera pose, labels) rendered by the code
 #: before the robot had an arm: per seed, at the start pose and after turning a quarter in place.
 HEAD_FRAMES = {
-    3: ("36a6cf450e837e91428624b8bc1d68360f1046a1435cc450f3348d7307714537",
-        "3d781cf3cb997317da3cc45385d0a3e9b9162d1f271cfab31b1f604b9d163a39"),
-    7: ("2f062155b64b2f68d75599d56d862a815e7382d25575772880460257f53e686c",
-        "74f23e44e80546408c00582034a944fc84c50b10839bbd71c1cd473f2ca2d991"),
+    3: ("7ecd401853f0512afd4ac3bb422c7523691fa210be4e018423239905a3e167ba",
+        "baf64acbb74361a6c5e657896bc1b921f4be89585fdb4df2b78f184c49a0ece7"),
+    7: ("a345d7e580d452de653adf7d896eaf94c574835c1b3eea6fcd91681684192d8e",
+        "d33dd53930495ebd88128f798229681d089598abaa5e4f5668963eb556346fb1"),
 }
 #: The gripper pointing along +y (into a storage front facing -y) and 0.3 rad down, which keeps the
 #: Panda's wrist (joint 6) off its limit close to the base; the fingers close across a level bar.
