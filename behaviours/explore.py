@@ -12,7 +12,7 @@ from py_trees.common import Access, Status
 from agent import blackboard as bb
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.explore import Candidates, ExploreConfig, plan_move, reachable_frontiers
-from agent.planning.frontier_choice import choose_frontier
+from agent.planning.frontier_choice import choose_frontier, kept_goal
 from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, frontier_log_weights, method_flags
 from agent.runtime.timing import StageTimer
 
@@ -60,26 +60,28 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         robot_xy = self.blackboard.get(bb.OBSERVATION).base_pose[:2]
         with self.timer.measure("planning") if self.timer else contextlib.nullcontext():
             candidates = reachable_frontiers(world_map, robot_xy, self.config)
+            centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]).reshape(-1, 2))
+            earlier_goal = self.blackboard.get(bb.FRONTIER_GOAL)
             if self.learned:
                 index = self._learned_choice(world_map, robot_xy, candidates) if candidates.frontiers else None
             else:
-                index = self._weighted_choice(world_map, candidates)
+                index = self._weighted_choice(candidates, centres, earlier_goal)
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
-        earlier_goal = self.blackboard.get(bb.FRONTIER_GOAL)
         goal = None if plan is None else world_map.spec.to_world(np.asarray(plan.frontier.centre))
         self.blackboard.set(bb.PLAN, plan)
         self.blackboard.set(bb.FRONTIER_GOAL, goal)
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.SUCCESS
-        kept = earlier_goal is not None and float(np.hypot(*(goal - earlier_goal))) <= self.config.choice.keep_within_m
+        kept = index == kept_goal(centres, earlier_goal, self.config.choice.keep_within_m)
         rule = ("Bellman over learned R_A, D" if self.learned else "kept the goal" if kept
                 else "sampled by semantic weight" if self.semantic else "nearest")
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
-    def _weighted_choice(self, world_map: ExplorationMap, candidates: Candidates) -> int | None:
-        """FBE's or the semantic methods' choice under the configured rule."""
+    def _weighted_choice(self, candidates: Candidates, centres: np.ndarray, earlier_goal: np.ndarray | None) -> int | None:
+        """FBE's or the semantic methods' choice under the configured rule; ``centres``: the
+        candidates' world (x, y)."""
         if not candidates.frontiers:
             return None
         log_weights = None
@@ -87,9 +89,7 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             semantic_map = self.blackboard.get(bb.SEMANTIC_MAP)
             log_weights = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
                                                self.weights, semantic_map.default)
-        centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]))
-        return choose_frontier(centres, candidates.distances_m, log_weights, self.blackboard.get(bb.FRONTIER_GOAL),
-                               self.config.choice, self.rng)
+        return choose_frontier(centres, candidates.distances_m, log_weights, earlier_goal, self.config.choice, self.rng)
 
     def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
         from agent.lfe.estimator import LearnedEstimator

@@ -69,17 +69,18 @@ def choose_frontier(centres_xy: np.ndarray, distances_m: np.ndarray, log_weights
     if config.rule == ChoiceRule.SAMPLE:
         return _fresh(distances, log_weights, 0.0, rng)
     weights = np.zeros(count) if log_weights is None else np.asarray(log_weights, dtype=float)
-    kept = _kept(np.asarray(centres_xy, dtype=float), goal_xy, config.keep_within_m)
+    kept = kept_goal(centres_xy, goal_xy, config.keep_within_m)
     if kept is not None and weights.max() - weights[kept] < config.switch_margin:
         return kept
     return _fresh(distances, log_weights, config.distance_cost_per_m, rng)
 
 
-def _kept(centres_xy: np.ndarray, goal_xy: np.ndarray | None, keep_within_m: float) -> int | None:
-    """The candidate that is the earlier goal (the nearest to it, if within reach), else None."""
-    if goal_xy is None:
+def kept_goal(centres_xy: np.ndarray, goal_xy: np.ndarray | None, keep_within_m: float) -> int | None:
+    """The candidate that is the earlier goal (the nearest to it, if within ``keep_within_m``), else
+    None: frontiers move as the map grows, so the goal is found again by place, not by identity."""
+    if goal_xy is None or len(centres_xy) == 0:
         return None
-    gaps = np.hypot(*(centres_xy - np.asarray(goal_xy, dtype=float)[None, :]).T)
+    gaps = np.hypot(*(np.asarray(centres_xy, dtype=float) - np.asarray(goal_xy, dtype=float)[None, :]).T)
     nearest = int(np.argmin(gaps))
     return nearest if gaps[nearest] <= keep_within_m else None
 
