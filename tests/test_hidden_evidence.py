@@ -56,8 +56,9 @@ def views():
     access = storage.storage.slot(item.slot).access
     world.set_part_state(storage.instance_id, access, storage.storage.part(access).upper)
     opened = _observation(world.observe(), camera, stand)
+    door = world._built.storage[storage.instance_id].placement.part_ids()[access]
     world.close()
-    return scenario, item, closed, opened
+    return scenario, item, closed, opened, door
 
 
 def _p_yes(observation: Observation, scenario, vlm_seed: int) -> float:
@@ -67,16 +68,22 @@ def _p_yes(observation: Observation, scenario, vlm_seed: int) -> float:
 
 
 def test_the_hidden_object_is_not_in_the_closed_frame_and_is_in_the_open_one(views) -> None:
-    _, item, closed, opened = views
+    _, item, closed, opened, _ = views
     assert item.instance_id not in {label.id for label in closed.labels}
     seen = [label for label in opened.labels if label.id == item.instance_id]
     assert seen and seen[0].inside is not None
 
 
 def test_the_vlm_has_no_evidence_until_the_door_is_opened(views) -> None:
-    scenario, _, closed, opened = views
+    scenario, _, closed, opened, _ = views
     closed_answers = [_p_yes(closed, scenario, k) > 0.5 for k in range(20)]
     opened_yes = [_p_yes(opened, scenario, k) for k in range(20)]
     # Closed: no evidence, so every seed answers the question's fixed favourite, right or wrong.
     assert len(set(closed_answers)) == 1
     assert np.mean(opened_yes) > 0.8
+
+
+def test_a_door_of_the_storage_shows_whether_it_stands_open(views) -> None:
+    _, _, closed, opened, door = views
+    assert {label.id: label.state for label in closed.labels}.get(door) == "closed"
+    assert {label.id: label.state for label in opened.labels}[door] == "open"

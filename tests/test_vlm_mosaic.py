@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agent.eqa.prompts import answer_prompt
+from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.mapping.camera import Intrinsics
 from agent.observation import InstanceLabel, Observation
 from agent.vlm.mosaic import side_by_side
@@ -41,7 +41,7 @@ def test_views_are_put_side_by_side_each_thing_labelled_as_it_shows_most() -> No
     assert np.all(both.segmentation[30:, 60:] == -1) and np.all(both.depth[30:, 60:] == 0)  # padding below
     labels = {label.id: label for label in both.labels}
     assert set(labels) == {3, 4, 9} and len(both.labels) == 3
-    assert labels[4].state is None  # the door shows most in the second view, closed there
+    assert labels[4].state == "open"  # shows most in the second view, closed there, but was seen open in the first
     assert both.base_pose == second.base_pose  # where the robot stood last
 
 
@@ -67,3 +67,32 @@ def test_shown_both_compartments_the_vlm_finds_what_lies_behind_the_second_door(
     holding = view(40, 60, [(CABINET, (0, 0, 40, 60)), (HAMMER, (10, 20, 15, 20))])
     assert [best(empty, seed) for seed in range(20)].count("No") >= 18
     assert [best(side_by_side([empty, holding]), seed) for seed in range(20)].count("Yes") >= 18
+
+
+def test_a_drawer_left_shut_keeps_an_open_and_empty_chest_from_settling_no() -> None:
+    """Shown one empty drawer of a chest beside a drawer still shut, the VLM cannot be sure the chest
+    holds no hammer; once every drawer has been seen open (each in its own view), it can."""
+    question = "Is there any hammer in the drawer chest in the bedroom?"
+    prompt = answer_prompt(question, ["Yes", "No", PAD_CHOICE, PAD_CHOICE])
+    chest = InstanceLabel(3, "drawer chest", "white", state="open")
+    top, bottom = (2, 5, 17, 50), (21, 5, 17, 50)  # the drawers' fronts on the chest's face
+
+    def drawers(top_state: str, bottom_state: str) -> Observation:
+        return view(40, 60, [(chest, (0, 0, 40, 60)), (InstanceLabel(4, "drawer", "white", state=top_state), top),
+                             (InstanceLabel(5, "drawer", "white", state=bottom_state), bottom)])
+
+    def relevance(observation: Observation, seed: int) -> float:
+        vlm = SimulatedVLM(SimParams(seed=seed, skill=1.0, notice_area_px=10.0))
+        return vlm.probabilities(VisualQuery(observation, relevance_prompt(question), YES_NO))["Yes"]
+
+    def p_no(observation: Observation, seed: int) -> float:
+        vlm = SimulatedVLM(SimParams(seed=seed, skill=1.0, notice_area_px=10.0))
+        return vlm.probabilities(VisualQuery(observation, prompt, LETTERS))["B"]
+
+    partial = drawers("open", "closed")
+    whole = side_by_side([drawers("open", "closed"), drawers("closed", "open")])
+    assert {label.id: label.state for label in whole.labels}[5] == "open"
+    partial_relevance = np.mean([relevance(partial, seed) for seed in range(40)])
+    whole_relevance = np.mean([relevance(whole, seed) for seed in range(40)])
+    assert whole_relevance > partial_relevance + 0.15
+    assert np.mean([p_no(whole, seed) for seed in range(40)]) > np.mean([p_no(partial, seed) for seed in range(40)])

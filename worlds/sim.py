@@ -97,6 +97,7 @@ class World:
         self._robot = -1
         self._base = -1
         self._facts: HomeFacts | None = None
+        self._parts: dict[int, tuple[int, str]] = {}  # a storage part's instance id -> (its piece's id, its name)
         self._arm: Arm | None = None
         self._riders: Riders | None = None
 
@@ -125,6 +126,8 @@ class World:
         self._floors = floor_bodies(self._built.labels)
         self._add_robot()
         self._facts = HomeFacts(home)
+        self._parts = {piece.placement.part_ids()[part.name]: (piece_id, part.name)
+                       for piece_id, piece in self._built.storage.items() for part in piece.placement.model.parts}
         self._riders = Riders(self.client, self._built, {item.instance_id: item.parent for item in home.objects})
         self.home, self.tabletop, self.scenario, self.observations = home, None, None, 0
 
@@ -247,8 +250,9 @@ class World:
         return replace(frame, labels=[self._visible_facts(label, joints, in_frame) for label in frame.labels])
 
     def _visible_facts(self, label: Label, joints: dict[int, dict[str, float]], in_frame: set[int]) -> Label:
-        """The label with what the camera shows of the thing now: a switch or door ``state``, and
-        the kind of storage it is seen ``inside``. Doors may have moved since the home was built.
+        """The label with what the camera shows of the thing now: a switch's ``state``, whether a
+        storage piece or one of its doors and drawers stands open, and the kind of storage it is
+        seen ``inside``. Doors may have moved since the home was built.
 
         ``inside`` is only given when the frame shows the storage's interior around the thing: the
         part that opens its slot stands open (past `CLOSED_SHARE` of its travel) and the piece
@@ -271,6 +275,10 @@ class World:
             extra["state"] = next(iter(switches.values()))
         if furniture is not None and furniture.storage is not None:
             extra["state"] = "open" if facts.is_open(furniture, joints=joints[thing_id]) else "closed"
+        part = self._parts.get(thing_id)
+        if part is not None:  # a door or drawer: whether it stands open shows
+            piece = facts.furniture[part[0]]
+            extra["state"] = "open" if facts.is_open(piece, part[1], joints=joints[part[0]]) else "closed"
         access = facts.access_of(item) if item is not None else None
         if access is not None and self._interior_in_view(*access, joints, in_frame):
             extra["inside"] = access[0].category

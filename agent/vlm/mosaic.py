@@ -8,13 +8,15 @@ piece, as a person would after opening every door.
 
 The mosaic is for the VLM only. Its pixels, depth and segmentation are the views' side by side
 (shorter views padded below: black, no depth return, no instance); each instance keeps the label
-of the view that shows the most of it. Its intrinsics say only its size, and its pose is the first
+of the view that shows the most of it, and a door or drawer seen standing open in any view is
+labelled open (every compartment opened in turn shows as opened). Its intrinsics say only its size, and its pose is the first
 view's: nothing may be back-projected from it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -48,6 +50,10 @@ def side_by_side(views: Sequence[Observation]) -> Observation:
             count = pixels.get(label.id, 0)
             if label.id not in best or count > best[label.id][0]:
                 best[label.id] = (count, label)
+    seen_open = {label.id for view in views for label in view.labels if label.state == "open"}
+    for instance, (count, label) in best.items():
+        if instance in seen_open and label.state != "open":
+            best[instance] = (count, replace(label, state="open"))
     first = views[0]
     intrinsics = Intrinsics(rgb.shape[1], height, first.intrinsics.fx, first.intrinsics.fy,
                             first.intrinsics.cx, first.intrinsics.cy)

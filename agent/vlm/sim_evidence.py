@@ -26,6 +26,7 @@ from worlds.questions import ParsedQuestion
 from worlds.vocabulary import COLOURS, OBJECTS, room_kind
 
 _MISREAD_WORDS = {"colour": tuple(COLOURS), "category": tuple(OBJECTS)}
+_PARTS = frozenset({"door", "drawer", "flap"})  # the parts of storage that open onto what it holds
 
 
 @dataclass(frozen=True)
@@ -143,14 +144,20 @@ def _exists(take: FrameTake, question: ParsedQuestion) -> Evidence:
 def _in_storage(take: FrameTake, question: ParsedQuestion, rng: np.random.Generator) -> Evidence:
     """What is inside, or is there any {category} in, the {container} in the {room}: what the
     frame shows lying inside that kind of storage (the world says ``inside`` only where the
-    storage's interior is in view); No, or nothing, when the storage stands open and empty."""
+    storage's interior is in view); No, or nothing, when the storage stands open and empty: sure
+    only when none of its doors and drawers in view is still shut."""
     is_open = _storage_open(take, question)
     fitting, _ = _split_by_room(take, take.noticed(
         lambda label: label.inside == question.container and _fits(label, question)), question)
     if question.template.asks == "yes/no":
         if fitting:
             return Evidence(frozenset({"yes"}), sure=True, inside=is_open)
-        return Evidence(frozenset({"no"}), sure=True, inside=True) if is_open else NONE
+        if not is_open:
+            return NONE
+        # Open and empty settles it only when no door or drawer of the piece is still shut in view:
+        # one empty drawer of a chest says little about the drawer below it.
+        whole = not _shut_parts_on_open_storage(take, question)
+        return Evidence(frozenset({"no"}), sure=whole, inside=whole)
     backed = frozenset(_misread(seen.label.category, _MISREAD_WORDS["category"], take.params.misread, rng)
                        for seen in fitting)
     return Evidence(backed, sure=bool(backed), inside=bool(backed) and is_open)
@@ -171,9 +178,32 @@ def _room_in_view(take: FrameTake, question: ParsedQuestion) -> bool:
     return named is not None and take.room_share(named) >= take.params.room_view_fraction
 
 
-def _storage_open(take: FrameTake, question: ParsedQuestion) -> bool:
-    """Whether the frame shows a piece of the named storage kind standing open, not taken to stand
-    in another room than the named one."""
+def _open_storage(take: FrameTake, question: ParsedQuestion) -> list[Seen]:
+    """The pieces of the named storage kind the frame shows standing open, not taken to stand in
+    another room than the named one."""
     pieces = [seen for seen in take.seen if seen.label.category == question.container and seen.label.state == "open"]
     fitting, _ = _split_by_room(take, pieces, question)
-    return bool(fitting)
+    return fitting
+
+
+def _storage_open(take: FrameTake, question: ParsedQuestion) -> bool:
+    return bool(_open_storage(take, question))
+
+
+def _shut_parts_on_open_storage(take: FrameTake, question: ParsedQuestion) -> bool:
+    """Whether a door or drawer shown shut lies on a piece `_open_storage` finds: its pixels'
+    centre within the piece's box in the image."""
+    segmentation = take.observation.segmentation
+    shut = [label.id for label in take.observation.labels if label.category in _PARTS and label.state == "closed"]
+    if not shut:
+        return False
+    centres = []
+    for part in shut:
+        rows, cols = np.nonzero(segmentation == part)
+        if rows.size:
+            centres.append((rows.mean(), cols.mean()))
+    for piece in _open_storage(take, question):
+        rows, cols = np.nonzero(segmentation == piece.label.id)
+        if rows.size and any(rows.min() <= r <= rows.max() and cols.min() <= c <= cols.max() for r, c in centres):
+            return True
+    return False
