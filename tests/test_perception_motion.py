@@ -14,7 +14,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from agent.acsg.from_memory import memory_detections
-from agent.perception.geometry import PartGeometry, fit_opening, part_motion, rotation_about
+from agent.perception.geometry import PartGeometry, fit_opening, opening_seen, part_motion, rotation_about
 from agent.perception.memory import Instance, InstanceMemory
 from agent.perception.voxels import pack, voxel_indices
 from test_perception_scene import FRONT, INTRINSICS, Box, Front, handle_boxes, look_at, render, storage
@@ -244,6 +244,20 @@ def test_a_door_stopped_short_of_its_swing_is_read_at_its_angle() -> None:
     for angle in (0.0, 0.5, 0.946, 1.3):
         amount, _ = fit_opening(door, panel, _carried(door, panel, angle), 1.25 * 1.3)
         assert amount == pytest.approx(angle, abs=0.025), angle
+
+
+def test_the_opening_is_read_off_the_part_itself_not_the_neighbour_seen_where_it_hides() -> None:
+    """A chest's second drawer pulled 0.2 m: with its handle hidden behind the arm, the handle seen
+    nearest to where it should be is the closed one of the drawer below, 0.12 m lower; read off that,
+    the drawer seemed shut (0.003 m) and its frames never went to the VLM."""
+    drawer = PartGeometry("drawer", np.array([0.0, 0.0, 0.9]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]))
+    handle = _panel(np.array([0.0, -0.02, 0.9]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]), 0.12, 0.03)
+    below = handle - np.array([0.0, 0.0, 0.12])
+    opened = _carried(drawer, handle, 0.2)
+    assert np.linalg.norm(below.mean(axis=0) - opened.mean(axis=0)) < 0.25  # near enough to be taken for it
+    assert opening_seen(drawer, handle, [below], 0.2, near_m=0.25, fit_m=0.03) is None
+    assert opening_seen(drawer, handle, [below, opened], 0.2, near_m=0.25, fit_m=0.03) == pytest.approx(0.2, abs=0.004)
+    assert opening_seen(drawer, handle, [opened + np.array([0.0, 0.0, 0.3])], 0.2, near_m=0.25, fit_m=0.03) is None
 
 
 def test_fit_opening_refuses_too_few_points_by_name() -> None:

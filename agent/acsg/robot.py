@@ -55,7 +55,7 @@ from agent.perception.geometry import (
     GeometryError,
     PartGeometry,
     handle_geometry,
-    fit_opening,
+    opening_seen,
     part_motion,
     top_grasp_point,
 )
@@ -76,6 +76,9 @@ SURFACE_LABELS = ("table", "counter")
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
 #: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
 SEEN_PART_M = 0.25
+#: ... and its points, carried by the opening found, lie within this (median) of the view: a
+#: neighbouring drawer's handle, seen where the opened one's hides behind the arm, fits no opening.
+SEEN_FIT_M = 0.03
 #: The table-edge scan (`Robot.scan_table_edge`): the wrist camera's height over the top, how far
 #: apart its views are across the table, how far to either side of the base they go (m), and how
 #: near the first row the head camera sees the top must come for the scan to be needed.
@@ -313,10 +316,10 @@ class Robot:
 
     def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
                       moved: float = 0.0) -> float:
-        """How far the part stands open by a head-camera look: `fit_opening` of the handle's remembered
-        points onto the handle seen nearest to where the skill says it left it (else of the part's
-        own points onto the part seen there), searching up to a quarter beyond the skill's figure;
-        that figure when neither is seen. ``moved``: how far open the memory holds the part now (its
+        """How far the part stands open by a head-camera look: `opening_seen` of the handle's
+        remembered points among the handles seen near where the skill says it left it (else of the
+        part's own points among the parts seen there), searching up to a quarter beyond the skill's
+        figure; that figure when neither is seen. ``moved``: how far open the memory holds the part now (its
         points are carried back to closed first). The memory is told the part moved to the opening
         found, then given the frame."""
         observation = self._frame("head")
@@ -324,7 +327,6 @@ class Robot:
         detections = detect(observation.depth, observation.segmentation, frame_labels(observation.labels),
                             observation.intrinsics, observation.camera_to_world, cfg.voxel_m, cfg.min_pixels,
                             cfg.max_depth_m)
-        motion = part_motion(geometry, reported)
         back = np.linalg.inv(part_motion(geometry, moved))
         amount = reported
         for inst in (self.memory.get(handle), part):
@@ -332,12 +334,10 @@ class Robot:
             if len(closed) < 3:
                 continue
             closed = closed @ back[:3, :3].T + back[:3, 3]
-            expected = motion[:3, :3] @ closed.mean(axis=0) + motion[:3, 3]
-            seen = [pts for pts in (centres(d.keys, cfg.voxel_m) for d in detections if d.label == inst.label)
-                    if len(pts) >= 3 and np.linalg.norm(pts.mean(axis=0) - expected) <= SEEN_PART_M]
-            if seen:
-                nearest = min(seen, key=lambda pts: float(np.linalg.norm(pts.mean(axis=0) - expected)))
-                amount, _ = fit_opening(geometry, closed, nearest, 1.25 * reported)
+            views = [centres(d.keys, cfg.voxel_m) for d in detections if d.label == inst.label]
+            seen = opening_seen(geometry, closed, views, reported, SEEN_PART_M, SEEN_FIT_M)
+            if seen is not None:
+                amount = seen
                 break
         if abs(amount - moved) > 0:
             self.memory.move(part.id, part_motion(geometry, amount) @ back)

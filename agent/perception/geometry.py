@@ -35,6 +35,7 @@ its orientation and moves along the normal; a door's TCP turns with the door abo
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -345,6 +346,28 @@ def fit_opening(geometry: PartGeometry, closed_points: np.ndarray, seen_points: 
         if score < best[1]:
             best = (float(amount), score)
     return best
+
+
+def opening_seen(geometry: PartGeometry, closed_points: np.ndarray, views: Sequence[np.ndarray], reported: float,
+                 near_m: float, fit_m: float) -> float | None:
+    """How far the part stands open by the view of it among ``views`` (point sets of the part's kind
+    seen now): those whose centre lies within ``near_m`` of where ``reported`` would carry the part,
+    nearest first, and the first that `fit_opening` (up to a quarter beyond ``reported``) carries
+    its points onto within ``fit_m`` (median). None when no view is of this part: with the part's own
+    view hidden (behind the arm, say), the nearest may be its neighbour's, a drawer's height away,
+    which no opening fits."""
+    closed = _points(closed_points, "closed_points", 3)
+    motion = part_motion(geometry, reported)
+    expected = motion[:3, :3] @ closed.mean(axis=0) + motion[:3, 3]
+    near = sorted((float(np.linalg.norm(points.mean(axis=0) - expected)), k) for k, points in enumerate(views)
+                  if len(points) >= 3)
+    for distance, k in near:
+        if distance > near_m:
+            break
+        amount, misfit = fit_opening(geometry, closed, views[k], 1.25 * reported)
+        if misfit <= fit_m:
+            return amount
+    return None
 
 
 def part_motion(geometry: PartGeometry, amount: float) -> np.ndarray:
