@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -127,6 +128,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         self.tried: set[int] = set()
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
         self._future: Future[_Outcome] | None = None
+        self._stop = threading.Event()  # the running act's: set, it opens no further part
         self._why_not = ""
 
     def initialise(self) -> None:
@@ -145,7 +147,8 @@ class LookInside(py_trees.behaviour.Behaviour):
         routes = None
         if self.blackboard.exists(bb.MAP):  # planned here, while the map holds still
             routes = routes_from(self.blackboard.get(bb.MAP), np.asarray(observation.base_pose[:2]))
-        self._future = self._pool.submit(self._open_and_look, kind, part, routes)
+        self._stop = threading.Event()
+        self._future = self._pool.submit(self._open_and_look, kind, part, routes, self._stop)
 
     def update(self) -> Status:
         if self._future is None:
@@ -170,6 +173,25 @@ class LookInside(py_trees.behaviour.Behaviour):
             if self.blackboard.exists(bb.TRAJECTORY):
                 self.blackboard.get(bb.TRAJECTORY).append(tuple(float(v) for v in outcome.last.base_pose))
         return Status.SUCCESS if outcome.views else Status.FAILURE
+
+    def terminate(self, new_status: Status) -> None:
+        """Interrupted while the arm is at work: the act finishes the part in hand (shut again and
+        the arm folded, as it must be for the base to drive) and opens no further one."""
+        if new_status == Status.INVALID:
+            self._stop.set()
+
+    def shutdown(self) -> None:
+        """At the end of the episode: wait for the part in hand, at most one skill's time, so that no
+        arm command goes out after the episode has closed its link."""
+        self._stop.set()
+        if self._future is not None and not self._future.done():
+            try:
+                self._future.result(timeout=self.config.skill_timeout_s)
+            except TimeoutError:
+                log.warning("the arm was still at work %g s after the episode ended", self.config.skill_timeout_s)
+            except Exception:  # its outcome no longer matters; _open_and_look logs its own errors
+                pass
+        self._pool.shutdown(wait=False, cancel_futures=True)
 
     def _integrate(self, observation: Observation) -> None:
         """The frame into the memory, and the room kind of every storage piece it shows standing
@@ -217,10 +239,10 @@ class LookInside(py_trees.behaviour.Behaviour):
                 return part
         return None
 
-    def _open_and_look(self, kind: str, first: Instance, routes: Routes | None) -> _Outcome:
+    def _open_and_look(self, kind: str, first: Instance, routes: Routes | None, stop: threading.Event) -> _Outcome:
         """In the worker thread: each door and drawer of ``first``'s piece in turn (``first`` first,
         then those seen since, up to ``max_parts``): open, look, close, stow. It stops at a part it
-        could not shut or stow after. Never raises: the records say why."""
+        could not shut or stow after, and once ``stop`` is set. Never raises: the records say why."""
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
                                              hold_open=True, scan_table_edge=False),  # storage stands on the floor
                       memory=self.memory, routes=routes)
@@ -234,7 +256,8 @@ class LookInside(py_trees.behaviour.Behaviour):
             records.append(record)
             if part_views:
                 views.append(_view_for_vlm(part_views))
-            if record["closed"] is False or record["stage"] in ("look", "stow") or len(records) >= self.config.max_parts:
+            if (record["closed"] is False or record["stage"] in ("look", "stow") or len(records) >= self.config.max_parts
+                    or stop.is_set()):
                 break
             part = self._untried_part(piece)
         return _Outcome(views, _head_frame(robot) if _moved(robot) else None, records)

@@ -157,3 +157,19 @@ def test_a_question_about_no_storage_fails_at_once_saying_so(board) -> None:
     behaviour = LookInside(link=None)  # type: ignore[arg-type]  # never reached: nothing to open
     assert _tick(behaviour, 5.0) == Status.FAILURE
     assert behaviour.feedback_message == "the question asks about no storage"
+
+
+@pytest.mark.slow
+def test_an_act_stopped_by_the_episode_ends_with_the_part_in_hand_shut_and_opens_no_other(board) -> None:
+    """The episode ended while the arm was at work: the behaviour's shutdown waited for the door in
+    hand to be shut and the arm folded (no arm command after the episode closed its link), and the
+    cabinet's second door was never opened."""
+    with _before_the_storage(9, board, scenario_seed=4) as (served, link, scenario, piece, first):
+        behaviour = LookInside(link)
+        behaviour.tick_once()
+        assert behaviour.status == Status.RUNNING
+        time.sleep(1.0)  # the arm is on its way to the first door
+        behaviour.stop(Status.INVALID)
+        behaviour.shutdown()
+        assert _put_back(served, link, piece)
+        assert behaviour.tried and len(behaviour.tried) == 1
