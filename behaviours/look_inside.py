@@ -18,7 +18,10 @@ the way (and one that cannot be shut ends the act).
 Every compartment is shown to the VLM at once: the best view into each part opened
 (`_view_for_vlm`), side by side (`agent.vlm.mosaic`), goes on the blackboard as ``inside_view`` for
 the `QueryVLM` after this behaviour. Shown one compartment at a time, the VLM took the empty one
-behind the first door for "nothing in the cabinet". The robot stays at its last stand, and a head
+behind the first door for "nothing in the cabinet". When a door or drawer of the piece could not
+be looked behind, the head frame of the piece as it stood (from the first stand reached) leads the
+row, so the VLM sees that part still shut and does not take the rest for the whole piece open and
+empty. The robot stays at its last stand, and a head
 frame from there becomes the observation, so the next move starts from where the robot is.
 
 Each part is opened once per episode. The arm takes seconds; the behaviour stays RUNNING meanwhile
@@ -249,17 +252,24 @@ class LookInside(py_trees.behaviour.Behaviour):
         piece = first.parent if first.parent is not None else first.id
         records: list[dict[str, Any]] = []
         views: list[Observation] = []
+        before: Observation | None = None  # the piece as it stood, from the first stand reached
         part: Instance | None = first
         while part is not None:
             self.tried.add(part.id)
             part_views, record = self._open_one(robot, kind, part, piece, look_first=not records)
             records.append(record)
+            before = before or robot.before
             if part_views:
                 views.append(_view_for_vlm(part_views))
             if (record["closed"] is False or record["stage"] in ("look", "stow") or len(records) >= self.config.max_parts
                     or stop.is_set()):
                 break
             part = self._untried_part(piece)
+        missed = any(not record["looked"] for record in records) or self._untried_part(piece) is not None
+        if views and missed and before is not None:
+            # Some door or drawer was not looked behind: the piece as it stood shows it shut, so
+            # that what the VLM sees is not taken for the whole piece open and empty.
+            views.insert(0, before)
         return _Outcome(views, _head_frame(robot) if _moved(robot) else None, records)
 
     def _open_one(self, robot: Robot, kind: str, part: Instance, piece: int,

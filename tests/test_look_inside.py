@@ -18,7 +18,10 @@ from agent.observation import Observation
 from agent.runtime.local_world import LocalWorld, local_world
 from agent.runtime.world_link import WorldLink
 from agent.eqa.storage_question import room_in_question, storage_in_question
-from behaviours.look_inside import LookInside
+from agent.eqa.prompts import YES_NO, relevance_prompt
+from agent.vlm.protocol import VisualQuery
+from agent.vlm.sim import SimParams, SimulatedVLM
+from behaviours.look_inside import LookInside, LookInsideConfig
 from worlds.facts import CLOSED_SHARE
 from worlds.home import generate_home
 from worlds.scenario import Scenario, make_scenario
@@ -134,6 +137,24 @@ def test_every_door_of_a_two_door_cabinet_is_opened_and_the_vlm_sees_both_compar
         inside = board.get(bb.INSIDE_VIEW)
         assert inside.rgb.shape[1] == 2 * first.rgb.shape[1]  # one view into each compartment
         assert "hammer" in {label.category for label in inside.labels}
+        assert _put_back(served, link, piece)
+
+
+@pytest.mark.slow
+def test_a_door_not_looked_behind_shows_shut_beside_the_empty_compartment_and_no_is_only_a_guess(board) -> None:
+    """Allowed one door of the two, the robot opens the empty compartment. Shown that alone, the VLM
+    said "No" as surely as from a view of the whole cabinet; the piece as it stood now leads the
+    row, its other door shut, and "No" is a guess."""
+    with _before_the_storage(9, board, scenario_seed=4) as (served, link, scenario, piece, first):
+        behaviour = LookInside(link, LookInsideConfig(max_parts=1))
+        assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
+        inside = board.get(bb.INSIDE_VIEW)
+        assert inside.rgb.shape[1] == 2 * first.rgb.shape[1]  # the piece as it stood, and the compartment
+        assert "hammer" not in {label.category for label in inside.labels}
+        assert {label.state for label in inside.labels if label.category == "door"} >= {"open", "closed"}
+        relevance = [SimulatedVLM(SimParams(seed=seed)).probabilities(
+            VisualQuery(inside, relevance_prompt(scenario.question), YES_NO))["Yes"] for seed in range(20)]
+        assert np.mean(relevance) < 0.65  # a guess's Beta(4, 4), not a view inside's Beta(16, 1.5)
         assert _put_back(served, link, piece)
 
 

@@ -152,6 +152,7 @@ class Robot:
         self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
         self.notes: list[str] = []
         self.views: list[Observation] = []  # frames taken inside the last part opened
+        self.before: Observation | None = None  # the head frame from the stand, before it was opened
         self._eye = np.zeros(3)
         self._head_sees_from = 0.0  # how far ahead of the start pose the head camera sees the table's top
 
@@ -239,11 +240,11 @@ class Robot:
             raise SkillPlanError("the robot has not looked yet")
         if handle is None:
             handle = self._handle(None, part)
-        self.views = []
+        self.views, self.before = [], None
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
         stand, amount = self._stand_for(geometry, self.routes)
         self._drive(stand, self.routes)
-        self._look("head")
+        self.before = self._look("head")
         geometry = handle_geometry(self.memory, handle, self._eye, kind=part.label)
         closed_centre = part.centroid
         hold = self.config.hold_open and geometry.kind not in self.config.look_inside
