@@ -40,10 +40,10 @@ from agent import blackboard as bb
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.mapping.occupancy import ExplorationMap
 from agent.observation import Observation
-from agent.perception.rooms import floor_points, read_rooms
+from agent.perception.rooms import floor_points_by_kind
 from agent.perception.sightings import SightingConfig, Sightings, storage_centres
 from agent.planning.explore import ExploreConfig
-from agent.planning.room_goal import RoomFloor, room_entry
+from agent.planning.room_goal import RoomFloors, room_entry, room_of_piece
 from agent.planning.route import Routes, routes_from, step_towards
 from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint
 from worlds.vocabulary import room_kind
@@ -57,7 +57,9 @@ class ApproachConfig:
     """``views``: sides a piece is looked at from before it is given up; ``max_moves``: moves
     towards one piece, or towards the room, at most; ``done_m``: an act record this near a piece
     means it was tried; ``entered_m``: the robot has been in the room once it stood this near a
-    cell of its floor seen; ``squeeze_m``: these moves may pass gaps this much narrower than the
+    cell of its floor seen; ``room_floor_m``: a piece whose room no frame showing it told stands
+    in the room whose floor was seen this near it (`agent.planning.room_goal.room_of_piece`);
+    ``squeeze_m``: these moves may pass gaps this much narrower than the
     map allows exploration (`ExplorationMap.traversable`): a doorway the robot saw the room
     through often looks too narrow for it on the map, whose obstacles stand up to 0.15 m fatter
     than they are. A gap that really is too narrow stops the base on contact, and the map learns
@@ -67,6 +69,7 @@ class ApproachConfig:
     max_moves: int = 6
     done_m: float = 1.0
     entered_m: float = 1.0
+    room_floor_m: float = 1.0
     squeeze_m: float = 0.1
     sightings: SightingConfig = field(default_factory=SightingConfig)
     viewpoint: ViewpointConfig = field(default_factory=ViewpointConfig)
@@ -75,7 +78,7 @@ class ApproachConfig:
         for name in ("views", "max_moves"):
             if getattr(self, name) < 1:
                 raise ValueError(f"act.approach.{name}: {getattr(self, name)} must be at least 1")
-        for name in ("done_m", "entered_m"):
+        for name in ("done_m", "entered_m", "room_floor_m"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"act.approach.{name}: {getattr(self, name)} must be positive")
         if not 0 <= self.squeeze_m <= MAX_SQUEEZE_M:
@@ -103,7 +106,7 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
         self.sightings = Sightings(config.sightings)
         self.progress: list[_Progress] = []  # by index into self.sightings.pieces
-        self.floor: RoomFloor | None = None
+        self.floors: RoomFloors | None = None
         self.room_moves = 0
         self.entered = False
         self._seen: Observation | None = None
@@ -129,13 +132,13 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         """What this frame shows of the named storage and room; whether the robot stands in the room."""
         self.sightings.add(storage_centres(observation, kind, self.config.sightings))
         self.progress += [_Progress() for _ in range(len(self.sightings.pieces) - len(self.progress))]
-        if room is None:
-            return
-        if self.floor is None:
-            self.floor = RoomFloor(world_map.spec)
-        self.floor.add(floor_points(observation, read_rooms(observation), room_kind(room),
-                                    self.config.sightings.max_depth_m))
-        self.entered |= self.floor.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
+        if self.floors is None:
+            self.floors = RoomFloors(world_map.spec)
+        for floor_kind, points in floor_points_by_kind(observation, self.config.sightings.max_depth_m).items():
+            self.floors.add(floor_kind, points)
+        if room is not None:
+            named = self.floors.of(room_kind(room))
+            self.entered |= named.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
 
     def _to_piece(self, kind: str, room: str | None, routes: Routes, world_map: ExplorationMap) -> bool:
         """Plan the move towards a view of the nearest piece still to be looked at, seen in the
@@ -144,12 +147,14 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         named = None if room is None else room_kind(room)
         choices = []
         for index, piece in enumerate(self.sightings.pieces):
-            if self._dealt_with(index, acts) or piece.room not in (None, named):
+            seen_in = piece.room if self.floors is None else room_of_piece(
+                piece.room, self.floors, np.asarray(piece.xy), self.config.room_floor_m)
+            if self._dealt_with(index, acts) or seen_in not in (None, named):
                 continue
             viewpoint = choose_viewpoint(routes, world_map.occupied, piece.xy, self.progress[index].tried,
                                          self.config.viewpoint)
             if viewpoint is not None:
-                choices.append((piece.room != named, viewpoint.path_m, index, viewpoint))
+                choices.append((seen_in != named, viewpoint.path_m, index, viewpoint))
         if not choices:
             self.feedback_message = f"no {kind} seen that is still to be looked at and can be reached"
             return False
@@ -167,12 +172,12 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
 
     def _to_room(self, room: str | None, routes: Routes) -> bool:
         """Plan the move into the named room, seen but not stood in yet; whether it did."""
-        if room is None or self.floor is None:
+        if room is None or self.floors is None:
             return False
         if self.entered or self.room_moves >= self.config.max_moves:
             self.feedback_message += f"; {'has been in' if self.entered else 'gave up going into'} the {room}"
             return False
-        goal = room_entry(routes, self.floor)
+        goal = room_entry(routes, self.floors.of(room_kind(room)))
         if goal is None:
             self.feedback_message += f"; no way into the {room} seen yet"
             return False

@@ -4,8 +4,9 @@ A question such as "Is there any milk carton in the fridge in the kitchen?" cann
 looking: the evidence is behind a door. When the question asks what is *in* or *inside* a kind of
 storage, and a piece of that kind with a handle on a door or drawer has been seen within
 ``reach_m`` of the robot (in the room the question names, when the frames showed which room a
-piece stands in: the furniture around it, `agent.perception.rooms`; pieces seen in another room
-are left alone), this behaviour has the robot
+piece stands in: the furniture around it, `agent.perception.rooms`, else the room whose floor was
+seen around it, `agent.planning.room_goal.room_of_piece`; pieces seen in another room are left
+alone), this behaviour has the robot
 (`agent.acsg.robot.Robot`) drive to a stand clear of what the opening sweeps (`skills.stand`),
 along a path over the robot's map, open one of its doors or drawers, take frames while it stands
 open (a door held open by its handle, looked at with the head camera, then pushed shut from the
@@ -54,7 +55,8 @@ from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
 from agent.perception.geometry import GeometryError
 from agent.perception.memory import STORAGE_CATEGORIES, Instance, InstanceMemory, MemoryConfig
-from agent.perception.rooms import read_rooms
+from agent.perception.rooms import floor_points_by_kind, read_rooms
+from agent.planning.room_goal import RoomFloors, room_of_piece
 from agent.planning.route import Routes, routes_from
 from agent.runtime.world_link import WorldLink
 from agent.vlm.mosaic import side_by_side
@@ -128,6 +130,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.ACTS, access=Access.WRITE)
         self.memory = InstanceMemory(MemoryConfig(part_gap_m=PART_GAP_M))
         self.rooms: dict[int, str] = {}  # storage piece (memory id) -> the room kind a frame showed it in
+        self.floors: RoomFloors | None = None  # the floor seen of each room kind, once the map is known
         self.tried: set[int] = set()
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
         self._future: Future[_Outcome] | None = None
@@ -200,6 +203,11 @@ class LookInside(py_trees.behaviour.Behaviour):
         """The frame into the memory, and the room kind of every storage piece it shows standing
         in a room that something in view names."""
         update = self.memory.integrate(observation)
+        if self.floors is None and self.blackboard.exists(bb.MAP):
+            self.floors = RoomFloors(self.blackboard.get(bb.MAP).spec)
+        if self.floors is not None:
+            for kind, points in floor_points_by_kind(observation, self.config.approach.sightings.max_depth_m).items():
+                self.floors.add(kind, points)
         reading = read_rooms(observation)
         rooms = {label.id: room for label in observation.labels if label.category in STORAGE_CATEGORIES
                  and (room := reading.room_of(label.id)) is not None}
@@ -216,7 +224,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         here = np.asarray(base_pose[:2], dtype=float)
         pieces = []
         for piece in self.memory.with_label(kind):
-            seen_in = self.rooms.get(piece.id)
+            seen_in = self._room_of(piece)
             distance = float(np.linalg.norm(piece.centroid[:2] - here))
             if distance <= self.config.reach_m and (room is None or seen_in in (None, room)):
                 pieces.append((seen_in != room, distance, piece.id))
@@ -226,15 +234,22 @@ class LookInside(py_trees.behaviour.Behaviour):
                 return part
         return None
 
+    def _room_of(self, piece: Instance) -> str | None:
+        """The room kind ``piece`` stands in as far as the frames tell (`room_of_piece`)."""
+        told = self.rooms.get(piece.id)
+        if self.floors is None:
+            return told
+        return room_of_piece(told, self.floors, piece.centroid[:2], self.config.approach.room_floor_m)
+
     def _untried_part(self, piece_id: int) -> Instance | None:
         """A door or drawer with a handle seen on it, not tried yet and not gone, of the piece or of
         a piece of its kind that the memory keeps apart from it within `SIBLING_M` and not seen in
         another room (one piece seen in fragments: a wardrobe's two doors on two carcasses)."""
         piece = self.memory.get(piece_id)
-        room = self.rooms.get(piece.id)
+        room = self._room_of(piece)
         pieces = [piece, *(other for other in self.memory.with_label(piece.label) if other.id != piece.id
                            and float(np.linalg.norm(other.centroid[:2] - piece.centroid[:2])) <= SIBLING_M
-                           and self.rooms.get(other.id) in (None, room))]
+                           and self._room_of(other) in (None, room))]
         for child in (child for holder in pieces for child in holder.children):
             part = self.memory.get(child)
             handled = any(self.memory.get(c).label == "handle" for c in part.children)

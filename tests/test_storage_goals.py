@@ -15,7 +15,7 @@ from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import InstanceLabel, Observation
 from agent.planning.paths import path_length
-from agent.planning.room_goal import RoomFloor, room_entry
+from agent.planning.room_goal import RoomFloor, RoomFloors, room_entry, room_of_piece
 from agent.planning.route import routes_from, step_towards
 from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint, in_plain_view
 from behaviours.approach_storage import ApproachConfig, ApproachStorage
@@ -121,6 +121,28 @@ def test_a_room_seen_but_out_of_reach_is_approached_as_near_as_the_map_allows() 
     goal = room_entry(routes, _floor(world_map, lambda x, y: (x > 0.5) & (np.abs(y) < 1.0)))
     assert goal is not None and routes.reaches(goal) and -0.8 < goal[0] < 0.0 and abs(goal[1]) < 1.0
     assert room_entry(routes, RoomFloor(world_map.spec)) is None  # nothing seen of it: nowhere to go
+
+
+def test_a_piece_whose_room_no_frame_told_stands_in_the_room_of_the_floor_around_it() -> None:
+    """Two rooms either side of a wall at x = 0: the laundry room's floor told from afar (west),
+    the bathroom's (east). A cabinet seen close up, nothing naming its room, east of the wall is
+    the bathroom's, not the laundry room's a question may name; in the doorway, both floors
+    around it, it stays untold."""
+    world_map = _map(_two_rooms)
+    def points(where) -> np.ndarray:
+        return world_map.spec.to_world(np.argwhere(_floor(world_map, where).seen))
+
+    floors = RoomFloors(world_map.spec)
+    floors.add("laundry room", points(lambda x, y: (x < -0.2) & (x > -2.8)))
+    floors.add("bathroom", points(lambda x, y: (x > 0.2) & (x < 2.8)))
+    floors.add("kitchen", np.zeros((0, 2)))  # a frame that tells nothing of the kitchen's floor adds nothing
+    assert set(floors.by_kind) == {"laundry room", "bathroom"}
+    assert room_of_piece(None, floors, np.array([2.0, 2.5]), 1.0) == "bathroom"
+    assert room_of_piece(None, floors, np.array([-2.0, 2.5]), 1.0) == "laundry room"
+    assert room_of_piece(None, floors, np.array([0.0, 0.0]), 1.0) is None  # both floors around it
+    assert room_of_piece("bathroom", floors, np.array([-2.0, 2.5]), 1.0) == "bathroom"  # a frame told: that wins
+    assert room_of_piece(None, RoomFloors(world_map.spec), np.array([2.0, 2.5]), 1.0) is None
+    assert not floors.of("kitchen").seen.any()
 
 
 @pytest.fixture

@@ -122,6 +122,13 @@ def floor_points(observation: Observation, reading: RoomReading, kind: str, max_
     return back_project(observation.depth, observation.intrinsics, observation.camera_to_world, mask)[:, :2]
 
 
+def floor_points_by_kind(observation: Observation, max_depth_m: float) -> dict[str, np.ndarray]:
+    """`floor_points` of every room kind the frame tells (read with `read_rooms`)."""
+    reading = read_rooms(observation)
+    kinds = {kind for floor in reading.floors if (kind := reading.kind(floor)) is not None}
+    return {kind: floor_points(observation, reading, kind, max_depth_m) for kind in sorted(kinds)}
+
+
 def _footing(observation: Observation, categories: dict[int, str], contact_m: float) -> dict[int, int]:
     """Instance -> what most of its bottom edge meets at the same depth (floors and walls stand on
     nothing, and nothing stands on a wall)."""

@@ -36,6 +36,40 @@ class RoomFloor:
         return bool((self.seen & self.spec.disc(tuple(np.asarray(xy, dtype=float)[:2]), within_m)).any())
 
 
+class RoomFloors:
+    """The floor cells seen of each room kind (a `RoomFloor` per kind the frames told)."""
+
+    def __init__(self, spec: GridSpec) -> None:
+        self.spec = spec
+        self.by_kind: dict[str, RoomFloor] = {}
+
+    def add(self, kind: str, points_xy: np.ndarray) -> None:
+        if len(points_xy):
+            self.by_kind.setdefault(kind, RoomFloor(self.spec)).add(points_xy)
+
+    def of(self, kind: str) -> RoomFloor:
+        """The floor seen of ``kind`` (none seen yet: an empty one)."""
+        return self.by_kind.get(kind) or RoomFloor(self.spec)
+
+    def kinds_near(self, xy: np.ndarray, within_m: float) -> set[str]:
+        """The room kinds whose floor was seen within ``within_m`` of ``xy``."""
+        return {kind for kind, floor in self.by_kind.items() if floor.contains(xy, within_m)}
+
+
+def room_of_piece(told: str | None, floors: RoomFloors, xy: np.ndarray, within_m: float) -> str | None:
+    """The room kind a piece of furniture stands in, as far as the frames tell: the kind a frame
+    showing it told (``told``), else the one kind of floor seen around it (within ``within_m``);
+    None when neither tells, or the floors around it are of more than one kind (a doorway).
+
+    A cabinet seen close up shows nothing that names its room, though the floor it stands on may
+    have been told from elsewhere: taken for the named room's, it was opened in the wrong room and
+    its contents answered the question."""
+    if told is not None:
+        return told
+    kinds = floors.kinds_near(xy, within_m)
+    return next(iter(kinds)) if len(kinds) == 1 else None
+
+
 def room_entry(routes: Routes, floor: RoomFloor) -> np.ndarray | None:
     """Where to drive to step into the room (world x, y): of the seen floor cells the base can reach
     and stand on, the one nearest the mean of all seen; with none, the reachable cell nearest to a
