@@ -12,7 +12,7 @@ import numpy as np
 
 from agent.config import Config, load_config
 from agent.runtime.run import RunRequest, run_episode
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from worlds.home import generate_home
 from worlds.spec import dump_spec
 

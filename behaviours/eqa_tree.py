@@ -38,7 +38,7 @@ from agent.mapping.semantic_map import SemanticValueConfig
 from agent.planning.explore import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
 from agent.planning.semantic import FrontierWeightConfig, method_flags
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.runtime.world_link import WorldLink
 from agent.vlm.protocol import VisionLanguageModel
 from agent.eqa.stopping import BudgetRule, StoppingRule

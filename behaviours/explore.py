@@ -14,7 +14,7 @@ from agent.mapping.occupancy import ExplorationMap
 from agent.planning.explore import Candidates, ExploreConfig, plan_move, reachable_frontiers
 from agent.planning.frontier_choice import choose_frontier, kept_goal
 from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, frontier_log_weights, method_flags
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 
 if TYPE_CHECKING:
     from agent.lfe.estimator import LearnedEstimator

@@ -8,7 +8,7 @@ import py_trees
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 
 
 class IntegrateMap(py_trees.behaviour.Behaviour):

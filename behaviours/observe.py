@@ -7,7 +7,7 @@ from py_trees.common import Access, Status
 from agent import blackboard as bb
 from agent.bus.codec import Message
 from agent.observation import Observation, ObservationError
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.runtime.world_link import WorldLink
 from behaviours.world_command import WorldCommand
 

@@ -20,7 +20,7 @@ from agent.mapping.semantic_map import SemanticValueConfig
 from agent.observation import Observation
 from agent.planning.prompt_points import PromptPoint, PromptPointConfig, prompt_points
 from agent.planning.semantic import point_values
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.vlm.annotate import draw_marks
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
 from behaviours.vlm_query import VLMQuery

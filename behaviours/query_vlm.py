@@ -9,7 +9,7 @@ from agent import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.observation import Observation
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
 from behaviours.vlm_query import VLMQuery
 from worlds.vocabulary import LETTERS

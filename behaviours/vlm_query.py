@@ -14,7 +14,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.vlm.protocol import VisionLanguageModel
 
 

@@ -13,13 +13,11 @@ from typing import Any
 
 import numpy as np
 
+from agent.perception.geometry import DEFAULT_AMOUNT
 from agent.runtime.world_link import WorldLink
 from skills.base import ArmSkill, SkillResult, SkillTarget
 from skills.plan import ArmPlanner, SkillPlan, SkillPlanError
 
-#: How far a part is opened when the target does not say: RoboEXP pulls drawers 0.2-0.4 m and
-#: swings doors in 5° steps; 75° lets the wrist camera see past the door into the shelves.
-DEFAULT_AMOUNT = {"drawer": 0.2, "door": math.radians(75.0)}
 
 
 def _part(target: SkillTarget, kind: str, skill: str) -> None:

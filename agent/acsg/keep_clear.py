@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from agent.perception.geometry import GeometryError, handle_geometry, part_motion
+from agent.perception.geometry import DEFAULT_AMOUNT, GeometryError, handle_geometry, part_motion
 from agent.perception.memory import InstanceMemory
-from skills.primitives import DEFAULT_AMOUNT
+
 
 #: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
 #: for the handle pass up to ~20 cm beside the hand's own line.

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from agent.mapping.grid import GridSpec
 from agent.planning.paths import distance_field
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 
 STEPS_PER_MOVE = 1.7
 """Time steps per forward move, turns included: the paper's empirical distance-to-steps ratio."""

@@ -25,7 +25,7 @@ from agent.lfe.coverage import CoverageConfig, Situation, TrueHome, run_coverage
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.methods import bellman_chooser, learned
 from agent.lfe.properties import label_frontiers
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 
 #: Frontier counts are reported in these bins (upper bounds, inclusive).
 BINS = (1, 2, 3, 4, 6, 9, 14, 20, math.inf)

@@ -21,7 +21,7 @@ from agent.lfe.bellman import choose_frontier, greedy
 from agent.lfe.coverage import CoverageConfig, FrontierChooser, Situation, TrueHome, fbe_near
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.properties import FrontierProperties, label_frontiers
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 
 PropertySource = Callable[[Situation], list[FrontierProperties]]
 

@@ -324,6 +324,12 @@ def moved_geometry(geometry: PartGeometry, amount: float) -> PartGeometry:
                         geometry.hinge_point, geometry.hinge_axis, geometry.width, geometry.front_depth)
 
 
+#: How far a part is opened when the target does not say: RoboEXP pulls drawers 0.2-0.4 m and
+#: swings doors in 5° steps; 75° lets the wrist camera see past the door into the shelves. Here, not
+#: with the skills, so that what an opening sweeps is planned (`agent.acsg.keep_clear`) without them.
+DEFAULT_AMOUNT = {"drawer": 0.2, "door": math.radians(75.0)}
+
+
 def fit_opening(geometry: PartGeometry, closed_points: np.ndarray, seen_points: np.ndarray, most: float,
                 steps: int = 80) -> tuple[float, float]:
     """How far the part stands open, from a view of it: the opening in [0, ``most``] that carries the

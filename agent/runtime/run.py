@@ -25,7 +25,7 @@ from agent.planning.semantic import method_flags, new_semantic_map
 from agent.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
 from agent.runtime.plots import save_map_png
 from agent.runtime.record import SnapshotLog, write_json_atomic
-from agent.runtime.timing import StageTimer
+from agent.timing import StageTimer
 from agent.runtime.world_link import WorldLink
 from agent.runtime.world_process import WorldProcess, WorldStartError
 from agent.vlm.backends import make_vlm

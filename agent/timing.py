@@ -1,4 +1,7 @@
-"""Per-stage timings of an episode, for `homebot bench step` and the run record."""
+"""Per-stage timings of an episode, for `homebot bench step` and the run record.
+
+Plain Python and numpy, so that the pure libraries (`agent.lfe`) can time their stages without
+loading the runtime."""
 
 from __future__ import annotations
 
