@@ -146,7 +146,8 @@ def _in_storage(take: FrameTake, question: ParsedQuestion, rng: np.random.Genera
     frame shows lying inside that kind of storage (the world says ``inside`` only where the
     storage's interior is in view); No, or nothing, when the storage stands open and empty: sure
     only when none of its doors and drawers in view is still shut."""
-    is_open = _storage_open(take, question)
+    open_pieces = _open_storage(take, question)
+    is_open = bool(open_pieces)
     fitting, _ = _split_by_room(take, take.noticed(
         lambda label: label.inside == question.container and _fits(label, question)), question)
     if question.template.asks == "yes/no":
@@ -156,7 +157,7 @@ def _in_storage(take: FrameTake, question: ParsedQuestion, rng: np.random.Genera
             return NONE
         # Open and empty settles it only when no door or drawer of the piece is still shut in view:
         # one empty drawer of a chest says little about the drawer below it.
-        whole = not _shut_parts_on_open_storage(take, question)
+        whole = not _shut_parts_on(take, open_pieces)
         return Evidence(frozenset({"no"}), sure=whole, inside=whole)
     backed = frozenset(_misread(seen.label.category, _MISREAD_WORDS["category"], take.params.misread, rng)
                        for seen in fitting)
@@ -186,13 +187,9 @@ def _open_storage(take: FrameTake, question: ParsedQuestion) -> list[Seen]:
     return fitting
 
 
-def _storage_open(take: FrameTake, question: ParsedQuestion) -> bool:
-    return bool(_open_storage(take, question))
-
-
-def _shut_parts_on_open_storage(take: FrameTake, question: ParsedQuestion) -> bool:
-    """Whether a door or drawer shown shut lies on a piece `_open_storage` finds: its pixels'
-    centre within the piece's box in the image."""
+def _shut_parts_on(take: FrameTake, pieces: list[Seen]) -> bool:
+    """Whether a door or drawer shown shut lies on one of ``pieces``: its pixels' centre within the
+    piece's box in the image."""
     segmentation = take.observation.segmentation
     shut = [label.id for label in take.observation.labels if label.category in _PARTS and label.state == "closed"]
     if not shut:
@@ -202,7 +199,7 @@ def _shut_parts_on_open_storage(take: FrameTake, question: ParsedQuestion) -> bo
         rows, cols = np.nonzero(segmentation == part)
         if rows.size:
             centres.append((rows.mean(), cols.mean()))
-    for piece in _open_storage(take, question):
+    for piece in pieces:
         rows, cols = np.nonzero(segmentation == piece.label.id)
         if rows.size and any(rows.min() <= r <= rows.max() and cols.min() <= c <= cols.max() for r, c in centres):
             return True
