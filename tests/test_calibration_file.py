@@ -17,12 +17,9 @@ from agent.eqa.calibration import (
     Calibration,
     CalibrationEpisode,
     CalibrationError,
-    calibration_for,
-    made_with,
-    mismatches,
     read_calibration,
-    write_calibration,
 )
+from agent.runtime.calibrations import calibration_for, made_with, mismatches, write_calibration
 from agent.eqa.conformal import conformal_quantile, nonconformity
 
 

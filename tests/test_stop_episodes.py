@@ -17,8 +17,8 @@ import pytest
 from agent.bus.session import free_tcp_endpoint
 from agent.config import Config, load_config
 from agent.eqa.answers import StepScores, steps_from_records
-from agent.eqa.calibration import (Calibration, CalibrationEpisode, made_with,
-                                   read_calibration, shipped_calibration, write_calibration)
+from agent.eqa.calibration import Calibration, CalibrationEpisode, read_calibration
+from agent.runtime.calibrations import made_with, shipped_calibration, write_calibration
 from agent.eqa.stopping import ConformalRule, RelevanceRule, replay
 from agent.runtime.run import RunError, RunRequest, run_episode
 from worlds.suite import plan_split, write_suite

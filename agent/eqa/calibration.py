@@ -1,14 +1,14 @@
 """The calibration file: the non-conformity scores of N calibration episodes and what made them.
 
 Conformal prediction promises coverage only for test episodes drawn like the calibration ones, so
-the file records the exploration policy and VLM the scores came from, and a run with a different
-policy or VLM refuses it (`mismatches`). A checksum over the content catches a file edited or cut
-short by hand.
+the file records the exploration policy and VLM the scores came from (`made_with`, filled in by
+`agent.runtime.calibrations` from the settings), and a run with a different policy or VLM refuses
+it (`differences`). A checksum over the content catches a file edited or cut short by hand. Plain
+JSON and numbers: no settings, no runtime.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import time
@@ -16,49 +16,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agent.config import Config
 from agent.eqa.answers import steps_from_records
 from agent.eqa.conformal import conformal_quantile, nonconformity
-from agent.runtime.record import write_json_atomic
 
 CALIBRATION_FORMAT = "homebot-calibration"
 CALIBRATION_VERSION = 1
-SHIPPED_DIR = Path(__file__).resolve().parent.parent / "data"
 
 
 class CalibrationError(ValueError):
     """A calibration file that cannot be used; the text names the file and the problem."""
-
-
-def made_with(config: Config) -> dict[str, Any]:
-    """What the scores depend on: the exploration policy, the map, the camera and the VLM.
-
-    Settings that change how but not what the VLM answers (a server's URL, timeouts, retries) are
-    left out, so moving a server does not invalidate a calibration. So is the step budget: a robot
-    with fewer steps than the calibration episodes had keeps the guarantee (its set can only be
-    larger), which docs/stopping.md spells out.
-    """
-    vlm: dict[str, Any] = {"backend": config.vlm.backend}
-    if config.vlm.backend == "sim":
-        vlm["sim"] = dataclasses.asdict(config.vlm.sim)
-    elif config.vlm.backend == "openai":
-        vlm["openai"] = {"model": config.vlm.openai.model}
-    else:
-        vlm["hf"] = {"path": config.vlm.hf.path}
-    return _plain({
-        "explore": dataclasses.asdict(config.explore),
-        "frontier_weights": dataclasses.asdict(config.frontier_weights),
-        "semantic_values": dataclasses.asdict(config.semantic_values),
-        "prompt_points": dataclasses.asdict(config.prompt_points),
-        "map": dataclasses.asdict(config.map),
-        "camera": dataclasses.asdict(config.camera),
-        "vlm": vlm,
-    })
-
-
-def _plain(data: Any) -> Any:
-    """JSON's view of ``data`` (tuples become lists), so a loaded file compares equal to a config."""
-    return json.loads(json.dumps(data))
 
 
 def suite_identity(path: Path, entries: int) -> dict[str, Any]:
@@ -118,10 +84,6 @@ def _checksum(body: dict[str, Any]) -> str:
     return "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
 
 
-def write_calibration(path: Path, calibration: Calibration) -> None:
-    write_json_atomic(Path(path), calibration.to_json(), indent=None)
-
-
 def read_calibration(path: Path) -> Calibration:
     """Load and check a calibration file; every problem is named with the file."""
     path = Path(path)
@@ -155,52 +117,14 @@ def read_calibration(path: Path) -> Calibration:
     return calibration
 
 
-def mismatches(recorded: dict[str, Any], config: Config) -> list[str]:
-    """The dotted settings where ``config`` differs from ``recorded``, a `made_with` of earlier runs."""
-    return _differences(recorded, made_with(config))
-
-
-def _differences(made: Any, now: Any, prefix: str = "") -> list[str]:
+def differences(made: Any, now: Any, prefix: str = "") -> list[str]:
+    """The dotted settings where ``now`` differs from ``made`` (both a calibration's `made_with`),
+    each as a line saying both values."""
     if isinstance(made, dict) and isinstance(now, dict):
         found = []
         for key in sorted(set(made) | set(now)):
-            found += _differences(made.get(key), now.get(key), f"{prefix}{key}.")
+            found += differences(made.get(key), now.get(key), f"{prefix}{key}.")
         return found
     if made != now:
         return [f"{prefix.rstrip('.')}: calibrated with {made!r}, this run uses {now!r}"]
     return []
-
-
-def shipped_calibration(config: Config) -> Path:
-    """The calibration shipped with homebot for this exploration method and VLM backend."""
-    return SHIPPED_DIR / f"calibration-{config.explore.method}-{config.vlm.backend}.json"
-
-
-def calibration_for(config: Config) -> tuple[Calibration, Path]:
-    """The calibration this run's `stop` settings name, refused when it does not fit the policy."""
-    path = Path(config.stop.calibration) if config.stop.calibration else shipped_calibration(config)
-    if not path.exists() and not config.stop.calibration:
-        shipped = ", ".join(sorted(p.name for p in SHIPPED_DIR.glob("calibration-*.json"))) or "none"
-        raise CalibrationError(
-            f"no calibration ships for explore.method={config.explore.method} with vlm.backend="
-            f"{config.vlm.backend} (shipped: {shipped}). Make one with `homebot calibrate --suite SUITE "
-            "--out FILE` and pass --set stop.calibration=FILE, or stop at the budget with --stop budget."
-        )
-    calibration = read_calibration(path)
-    check_fits(calibration, path, config)
-    return calibration, path
-
-
-def check_fits(calibration: Calibration, path: Path, config: Config) -> None:
-    """Refuse a calibration made with another policy or VLM, naming every difference, unless the
-    config says to accept it."""
-    differences = mismatches(calibration.made_with, config)
-    if differences and not config.stop.accept_mismatched_calibration:
-        listed = "\n  ".join(differences)
-        raise CalibrationError(
-            f"calibration file {path} was made with another policy or VLM, so its guarantee does not hold here:\n"
-            f"  {listed}\n"
-            "Calibrate this policy with `homebot calibrate --suite SUITE --out FILE` (same --set options) "
-            "and pass --set stop.calibration=FILE, stop at the budget with --stop budget, "
-            "or accept it anyway with --set stop.accept_mismatched_calibration=true."
-        )

@@ -26,7 +26,7 @@ from typing import Any
 
 from agent.config import load_config
 from agent.eqa.answers import steps_from_records
-from agent.eqa.calibration import calibration_for
+from agent.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StoppingRule, make_rule, replay
 from worlds.vocabulary import LETTERS
 

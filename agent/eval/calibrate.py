@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from agent.config import Config
-from agent.eqa.calibration import (Calibration, CalibrationEpisode, CalibrationError, made_with, mismatches,
-                                   suite_identity, write_calibration)
+from agent.eqa.calibration import Calibration, CalibrationEpisode, CalibrationError, suite_identity
+from agent.runtime.calibrations import made_with, mismatches, write_calibration
 from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from agent.runtime.record import write_json_atomic
 from worlds.suite import read_suite

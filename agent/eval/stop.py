@@ -25,7 +25,8 @@ import numpy as np
 
 from agent.config import Config
 from agent.eqa.answers import StepScores, steps_from_records
-from agent.eqa.calibration import Calibration, check_fits, read_calibration
+from agent.eqa.calibration import Calibration, read_calibration
+from agent.runtime.calibrations import check_fits
 from agent.eqa.conformal import sequence_set
 from agent.eqa.stopping import (BudgetRule, ConformalRule, EntropyRule, RelevanceRule, StoppingRule,
                                 replay)

@@ -18,7 +18,8 @@ from agent.bus.rpc import QueryFailed
 from agent.bus.session import free_tcp_endpoint, open_session
 from agent.config import Config
 from agent.eqa.answers import AnswerLog
-from agent.eqa.calibration import CalibrationError, calibration_for
+from agent.eqa.calibration import CalibrationError
+from agent.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StopRuleName, StoppingRule, make_rule
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.semantic import method_flags, new_semantic_map
