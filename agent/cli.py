@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from agent.bus.session import EndpointError, open_session
+from worlds.bus.session import EndpointError, open_session
 from agent.config import Config, ConfigError, load_config
 
 DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"

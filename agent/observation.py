@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agent.bus.codec import Message
+from worlds.bus.codec import Message
 from agent.mapping.camera import Intrinsics
 
 

@@ -15,7 +15,7 @@ from typing import Any, TextIO
 
 import zenoh
 
-from agent.bus.keys import ANY_AGENT_TREE, Keys
+from worlds.bus.keys import ANY_AGENT_TREE, Keys
 
 _GLYPHS = {"SUCCESS": ("✔", "32"), "FAILURE": ("✕", "31"), "RUNNING": ("*", "33"), "INVALID": ("-", "90")}
 

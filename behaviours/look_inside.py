@@ -50,7 +50,7 @@ from py_trees.common import Access, Status
 
 from agent import blackboard as bb
 from agent.acsg.robot import Robot, RobotConfig
-from agent.bus.rpc import QueryFailed
+from worlds.bus.rpc import QueryFailed
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
 from agent.perception.geometry import GeometryError

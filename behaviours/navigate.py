@@ -13,7 +13,7 @@ import numpy as np
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
-from agent.bus.codec import Message
+from worlds.bus.codec import Message
 from agent.runtime.world_link import WorldLink
 from behaviours.world_command import WorldCommand
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
-from agent.bus.codec import Message
+from worlds.bus.codec import Message
 from agent.observation import Observation, ObservationError
 from agent.timing import StageTimer
 from agent.runtime.world_link import WorldLink

@@ -7,8 +7,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from agent.bus.codec import Message
-from agent.bus.rpc import PendingReply, QueryFailed
+from worlds.bus.codec import Message
+from worlds.bus.rpc import PendingReply, QueryFailed
 from agent.runtime.world_link import WorldLink
 
 

@@ -44,8 +44,8 @@ import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
-from agent.bus.codec import Message
-from agent.bus.rpc import PendingReply, QueryFailed
+from worlds.bus.codec import Message
+from worlds.bus.rpc import PendingReply, QueryFailed
 from agent.perception.geometry import PartGeometry
 from agent.runtime.world_link import WorldLink
 from skills.plan import ArmPlanner, SkillPlan, SkillPlanError, Step

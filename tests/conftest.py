@@ -8,7 +8,7 @@ import pybullet as p
 import pytest
 import zenoh
 
-from agent.bus.keys import Keys
+from worlds.bus.keys import Keys
 from agent.runtime.local_world import local_world
 
 

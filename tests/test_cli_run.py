@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from agent.bus.session import free_tcp_endpoint
+from worlds.bus.session import free_tcp_endpoint
 from agent.cli import _parser, main, shortcut_overrides
 from agent.config import load_config
 from worlds.suite import plan_split, read_suite, write_suite

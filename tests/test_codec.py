@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agent.bus.codec import ALLOWED_DTYPES, MAGIC, Limits, Message, WireError, decode, encode
+from worlds.bus.codec import ALLOWED_DTYPES, MAGIC, Limits, Message, WireError, decode, encode
 
 
 def raw_message(header: Any, payload: bytes = b"", *, magic: bytes = MAGIC, header_len: int | None = None) -> bytes:

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from agent.bus.keys import ANY_AGENT_TREE
-from agent.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.keys import ANY_AGENT_TREE
+from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.config import load_config
 from agent.runtime.run import RunRequest, run_episode
 

@@ -13,7 +13,7 @@ import numpy as np
 import py_trees
 import pytest
 
-from agent.bus.rpc import QueryFailed
+from worlds.bus.rpc import QueryFailed
 from agent.config import load_config
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.runtime.local_world import LocalWorld, local_world

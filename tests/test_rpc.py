@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 import zenoh
 
-from agent.bus.codec import Message, decode, encode
-from agent.bus.keys import ANY_AGENT_TREE, Keys, check_namespace
-from agent.bus.liveness import LivenessWatch
-from agent.bus.rpc import CommandServer, PendingReply, QueryFailed, RequestError, call
-from agent.bus.session import EndpointError, check_endpoint, free_tcp_endpoint, open_session
+from worlds.bus.codec import Message, decode, encode
+from worlds.bus.keys import ANY_AGENT_TREE, Keys, check_namespace
+from worlds.bus.liveness import LivenessWatch
+from worlds.bus.rpc import CommandServer, PendingReply, QueryFailed, RequestError, call
+from worlds.bus.session import EndpointError, check_endpoint, free_tcp_endpoint, open_session
 
 PROPAGATE_S = 0.3  # declarations need a moment to reach the other session
 

@@ -15,8 +15,8 @@ import pytest
 from py_trees.common import Access, Status
 
 from agent import blackboard as bb
-from agent.bus.keys import Keys
-from agent.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.keys import Keys
+from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.runtime.episode import EpisodeOutcome, EpisodeRunner
 from agent.runtime.snapshot import SNAPSHOT_VERSION, short
 from agent.watch import SnapshotError, parse_snapshot, render, watch

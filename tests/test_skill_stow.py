@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import pytest
 import zenoh
 
-from agent.bus.keys import Keys
+from worlds.bus.keys import Keys
 from agent.runtime.world_link import WorldLink
 from skills.base import SkillTarget, run_skill
 from skills.plan import ArmPlanner, SkillPlanError

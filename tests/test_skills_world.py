@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import zenoh
 
-from agent.bus.keys import Keys
+from worlds.bus.keys import Keys
 from agent.mapping.camera import back_project
 from agent.observation import Observation
 from agent.perception.geometry import PartGeometry, handle_geometry, top_grasp_point

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agent.bus.session import free_tcp_endpoint
+from worlds.bus.session import free_tcp_endpoint
 from agent.config import Config, load_config
 from agent.eqa.answers import StepScores, steps_from_records
 from agent.eqa.calibration import Calibration, CalibrationEpisode, read_calibration

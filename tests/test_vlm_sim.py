@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agent.bus.codec import Message, decode, encode
+from worlds.bus.codec import Message, decode, encode
 from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.mapping.camera import Intrinsics
 from agent.observation import InstanceLabel, Observation, ObservationError

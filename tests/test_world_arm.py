@@ -15,8 +15,8 @@ import pybullet as p
 import pytest
 import zenoh
 
-from agent.bus.keys import Keys
-from agent.bus.rpc import QueryFailed, RequestError, call
+from worlds.bus.keys import Keys
+from worlds.bus.rpc import QueryFailed, RequestError, call
 from worlds.camera import Frame
 from worlds.commands import parse_arm_trajectory, parse_gripper, parse_observe
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig

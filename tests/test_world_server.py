@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 import zenoh
 
-from agent.bus.codec import decode
-from agent.bus.keys import Keys
-from agent.bus.liveness import LivenessWatch
-from agent.bus.rpc import QueryFailed, call
-from agent.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.codec import decode
+from worlds.bus.keys import Keys
+from worlds.bus.liveness import LivenessWatch
+from worlds.bus.rpc import QueryFailed, call
+from worlds.bus.session import free_tcp_endpoint, open_session
 from worlds.freespace import clearance
 from worlds.home import generate_home
 from worlds.robot import ROBOT_RADIUS, CameraConfig, camera_pose

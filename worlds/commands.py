@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from agent.bus.rpc import RequestError
+from worlds.bus.rpc import RequestError
 from worlds.home import ROOM_COUNT, HomeSpec
 from worlds.robot_arm import CAMERAS, ArmSpec
 from worlds.scenario import Scenario

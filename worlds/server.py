@@ -1,6 +1,6 @@
 """The world server: one simulated home answering commands over Zenoh.
 
-Queryables (all under ``<ns>``, see `agent.bus.keys`):
+Queryables (all under ``<ns>``, see `worlds.bus.keys`):
 
 - ``world/cmd/reset``      {"seed": int >= 0, "n_rooms": optional 4..10} -> scenario, home size and bounds, pose
                            ({"seed", "tabletop": task} -> a tabletop exploration scene instead)
@@ -30,10 +30,10 @@ from typing import Any
 
 import zenoh
 
-from agent.bus.codec import Message
-from agent.bus.keys import Keys
-from agent.bus.rpc import Arrays, CommandServer, RequestError
-from agent.bus.session import EndpointError, open_session
+from worlds.bus.codec import Message
+from worlds.bus.keys import Keys
+from worlds.bus.rpc import Arrays, CommandServer, RequestError
+from worlds.bus.session import EndpointError, open_session
 from worlds import commands
 from worlds.evaluation import EpisodeRecord
 from worlds.home import generate_home

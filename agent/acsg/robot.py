@@ -47,7 +47,7 @@ import numpy as np
 from agent.acsg.from_memory import Box, memory_detections
 from agent.acsg.interfaces import Detection, SkillCall, SkillResult
 from agent.acsg.keep_clear import kept_clear
-from agent.bus.rpc import QueryFailed
+from worlds.bus.rpc import QueryFailed
 from agent.mapping.camera import nearest_seen_ahead
 from agent.observation import Observation
 from agent.perception.frames import detect, frame_labels

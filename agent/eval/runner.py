@@ -24,8 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agent.bus.keys import check_namespace
-from agent.bus.session import check_endpoint, free_tcp_endpoint
+from worlds.bus.keys import check_namespace
+from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.config import Config, load_config
 from agent.runtime.run import RunError, RunRequest, run_episode
 from agent.runtime.world_process import WorldProcess

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import zenoh
 
-from agent.bus.keys import Keys
-from agent.bus.liveness import LivenessWatch
-from agent.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.keys import Keys
+from worlds.bus.liveness import LivenessWatch
+from worlds.bus.session import free_tcp_endpoint, open_session
 from worlds.server import WorldServer
 from worlds.sim import World
 

@@ -13,9 +13,9 @@ from typing import Any
 import py_trees
 
 from agent import blackboard as bb
-from agent.bus.keys import Keys, check_namespace
-from agent.bus.rpc import QueryFailed
-from agent.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.keys import Keys, check_namespace
+from worlds.bus.rpc import QueryFailed
+from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.config import Config
 from agent.eqa.answers import AnswerLog
 from agent.eqa.calibration import CalibrationError

@@ -6,10 +6,10 @@ from typing import Any
 
 import zenoh
 
-from agent.bus.codec import Message
-from agent.bus.keys import Keys
-from agent.bus.liveness import LivenessWatch
-from agent.bus.rpc import Arrays, PendingReply
+from worlds.bus.codec import Message
+from worlds.bus.keys import Keys
+from worlds.bus.liveness import LivenessWatch
+from worlds.bus.rpc import Arrays, PendingReply
 
 
 class WorldLink:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import zenoh
 
-from agent.bus.codec import DEFAULT_LIMITS, Limits, Message, WireError, decode, encode
+from worlds.bus.codec import DEFAULT_LIMITS, Limits, Message, WireError, decode, encode
 
 log = logging.getLogger(__name__)
 
