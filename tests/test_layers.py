@@ -25,8 +25,6 @@ STILL_UPWARD = {
                          "skills.primitives", "skills.stand", "skills.stow", "worlds.bus.rpc"},
     # training-data generation runs homes in a process pool: orchestration, not a library
     "agent.lfe.data": {"agent.runtime.pool"},
-    # measuring the simulated VLM renders views of homes in a world
-    "agent.vlm.cases": {"worlds.sim"},
 }
 
 
