@@ -40,7 +40,7 @@ from agent import blackboard as bb
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.mapping.occupancy import ExplorationMap
 from agent.observation import Observation
-from agent.perception.rooms import floor_points_by_kind
+from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.perception.sightings import SightingConfig, Sightings, storage_centres
 from agent.planning.explore import ExploreConfig
 from agent.planning.room_goal import RoomFloors, room_entry, room_of_piece
@@ -120,35 +120,36 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         room = room_in_question(question)
         world_map: ExplorationMap = self.blackboard.get(bb.MAP)
         observation: Observation = self.blackboard.get(bb.OBSERVATION)
+        if self.floors is None:
+            self.floors = RoomFloors(world_map.spec)
         if observation is not self._seen:
             self._seen = observation
-            self._note(observation, kind, room, world_map)
+            self._note(observation, kind, room, self.floors)
         routes = routes_from(world_map, np.asarray(observation.base_pose[:2]), self.explore, self.config.squeeze_m)
-        if self._to_piece(kind, room, routes, world_map) or self._to_room(room, routes):
+        if self._to_piece(kind, room, routes, world_map, self.floors) or self._to_room(room, routes, self.floors):
             return Status.SUCCESS
         return Status.FAILURE
 
-    def _note(self, observation: Observation, kind: str, room: str | None, world_map: ExplorationMap) -> None:
+    def _note(self, observation: Observation, kind: str, room: str | None, floors: RoomFloors) -> None:
         """What this frame shows of the named storage and room; whether the robot stands in the room."""
         self.sightings.add(storage_centres(observation, kind, self.config.sightings))
         self.progress += [_Progress() for _ in range(len(self.sightings.pieces) - len(self.progress))]
-        if self.floors is None:
-            self.floors = RoomFloors(world_map.spec)
-        for floor_kind, points in floor_points_by_kind(observation, self.config.sightings.max_depth_m).items():
-            self.floors.add(floor_kind, points)
+        for floor_kind, points in floor_points_by_kind(observation, read_rooms(observation),
+                                                       self.config.sightings.max_depth_m).items():
+            floors.add(floor_kind, points)
         if room is not None:
-            named = self.floors.of(room_kind(room))
+            named = floors.of(room_kind(room))
             self.entered |= named.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
 
-    def _to_piece(self, kind: str, room: str | None, routes: Routes, world_map: ExplorationMap) -> bool:
+    def _to_piece(self, kind: str, room: str | None, routes: Routes, world_map: ExplorationMap,
+                  floors: RoomFloors) -> bool:
         """Plan the move towards a view of the nearest piece still to be looked at, seen in the
         named room or in a room nothing told, those in the named room first; whether it did."""
         acts = self.blackboard.get(bb.ACTS) if self.blackboard.exists(bb.ACTS) else []
         named = None if room is None else room_kind(room)
         choices = []
         for index, piece in enumerate(self.sightings.pieces):
-            seen_in = piece.room if self.floors is None else room_of_piece(
-                piece.room, self.floors, np.asarray(piece.xy), self.config.room_floor_m)
+            seen_in = room_of_piece(piece.room, floors, np.asarray(piece.xy), self.config.room_floor_m)
             if self._dealt_with(index, acts) or seen_in not in (None, named):
                 continue
             viewpoint = choose_viewpoint(routes, world_map.occupied, piece.xy, self.progress[index].tried,
@@ -170,14 +171,14 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
                                  f"{viewpoint.path_m:.1f} m away{'' if arrives else ' (part of the way)'}")
         return True
 
-    def _to_room(self, room: str | None, routes: Routes) -> bool:
+    def _to_room(self, room: str | None, routes: Routes, floors: RoomFloors) -> bool:
         """Plan the move into the named room, seen but not stood in yet; whether it did."""
-        if room is None or self.floors is None:
+        if room is None:
             return False
         if self.entered or self.room_moves >= self.config.max_moves:
             self.feedback_message += f"; {'has been in' if self.entered else 'gave up going into'} the {room}"
             return False
-        goal = room_entry(routes, self.floors.of(room_kind(room)))
+        goal = room_entry(routes, floors.of(room_kind(room)))
         if goal is None:
             self.feedback_message += f"; no way into the {room} seen yet"
             return False

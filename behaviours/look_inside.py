@@ -191,24 +191,22 @@ class LookInside(py_trees.behaviour.Behaviour):
         arm command goes out after the episode has closed its link."""
         self._stop.set()
         if self._future is not None and not self._future.done():
-            try:
+            try:  # _open_and_look never raises: its records say what went wrong
                 self._future.result(timeout=self.config.skill_timeout_s)
             except TimeoutError:
                 log.warning("the arm was still at work %g s after the episode ended", self.config.skill_timeout_s)
-            except Exception:  # its outcome no longer matters; _open_and_look logs its own errors
-                pass
         self._pool.shutdown(wait=False, cancel_futures=True)
 
     def _integrate(self, observation: Observation) -> None:
         """The frame into the memory, and the room kind of every storage piece it shows standing
         in a room that something in view names."""
         update = self.memory.integrate(observation)
+        reading = read_rooms(observation)
         if self.floors is None and self.blackboard.exists(bb.MAP):
             self.floors = RoomFloors(self.blackboard.get(bb.MAP).spec)
         if self.floors is not None:
-            for kind, points in floor_points_by_kind(observation, self.config.approach.sightings.max_depth_m).items():
+            for kind, points in floor_points_by_kind(observation, reading, self.config.approach.sightings.max_depth_m).items():
                 self.floors.add(kind, points)
-        reading = read_rooms(observation)
         rooms = {label.id: room for label in observation.labels if label.category in STORAGE_CATEGORIES
                  and (room := reading.room_of(label.id)) is not None}
         for key in (*update.created, *update.updated):

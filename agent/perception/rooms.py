@@ -122,9 +122,8 @@ def floor_points(observation: Observation, reading: RoomReading, kind: str, max_
     return back_project(observation.depth, observation.intrinsics, observation.camera_to_world, mask)[:, :2]
 
 
-def floor_points_by_kind(observation: Observation, max_depth_m: float) -> dict[str, np.ndarray]:
-    """`floor_points` of every room kind the frame tells (read with `read_rooms`)."""
-    reading = read_rooms(observation)
+def floor_points_by_kind(observation: Observation, reading: RoomReading, max_depth_m: float) -> dict[str, np.ndarray]:
+    """`floor_points` of every room kind ``reading`` (the frame's `read_rooms`) tells."""
     kinds = {kind for floor in reading.floors if (kind := reading.kind(floor)) is not None}
     return {kind: floor_points(observation, reading, kind, max_depth_m) for kind in sorted(kinds)}
 

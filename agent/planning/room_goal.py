@@ -45,11 +45,13 @@ class RoomFloors:
 
     def add(self, kind: str, points_xy: np.ndarray) -> None:
         if len(points_xy):
-            self.by_kind.setdefault(kind, RoomFloor(self.spec)).add(points_xy)
+            self.of(kind).add(points_xy)
 
     def of(self, kind: str) -> RoomFloor:
-        """The floor seen of ``kind`` (none seen yet: an empty one)."""
-        return self.by_kind.get(kind) or RoomFloor(self.spec)
+        """The floor seen of ``kind`` (none seen yet: an empty one, kept for the next frames)."""
+        if kind not in self.by_kind:
+            self.by_kind[kind] = RoomFloor(self.spec)
+        return self.by_kind[kind]
 
     def kinds_near(self, xy: np.ndarray, within_m: float) -> set[str]:
         """The room kinds whose floor was seen within ``within_m`` of ``xy``."""
