@@ -1,0 +1,71 @@
+"""Same seed, same episode: whole episodes, digested, hold the robot's behaviour fixed.
+
+Each case runs a real episode (world process, Zenoh, the tree) and digests what it decided and
+what the world's evaluator saw: every step's answer probabilities and relevance, the answer and
+why, what was opened, the floor seen after every frame, the path driven. A digest that changes
+means the robot now behaves differently for the same seed: that is either a bug in a change meant
+to keep behaviour (a refactor), or an intended change, and then the shipped calibration is remade
+and the digest here updated in the same commit. Timings, run ids and tick counts (which depend on
+the machine's speed) are left out.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from agent.config import load_config
+from agent.eval.robot_tabletop import run_robot
+from agent.runtime.run import RunRequest, run_episode
+from worlds.home import generate_home
+from worlds.scenario import make_scenario
+
+pytestmark = pytest.mark.slow
+
+#: name -> (seed, settings, hidden question, digest of the episode)
+EPISODES = {
+    "semantic-conformal": (3, ["episode.budget=12"], False, "0f3a327d3505e2a3"),
+    "fbe-entropy": (5, ["explore.method=fbe", "episode.budget=10", "stop.rule=entropy"], False, "ab9aa08d397ff9b7"),
+    "lfe": (7, ["explore.method=lfe", "episode.budget=8", "stop.rule=budget"], False, "1f075f5d09d4aa87"),
+    "hidden": (60, [], True, "606fdecd94843cec"),
+}
+#: tabletop task and variant -> digest of the robot's exploration (Table I's executor)
+TABLETOP = {("recursive", 0): "5b8264ab7c8f062c", ("drawer-door", 1): "b9a05ee11a131494"}
+
+_DECIDED = ("status", "reason", "failed_behaviour", "answer", "answer_detail", "steps", "step_scores",
+            "prediction_set", "acts", "evaluation")
+_TIMINGS = {"seconds", "wall_s", "planning_ms", "execution_s", "skill_seconds", "ticks"}
+
+
+def _without_timings(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {key: _without_timings(item) for key, item in value.items() if key not in _TIMINGS}
+    if isinstance(value, list):
+        return [_without_timings(item) for item in value]
+    return value
+
+
+def _digest(record: dict[str, Any]) -> str:
+    text = json.dumps(_without_timings(record), sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@pytest.mark.parametrize("name", sorted(EPISODES))
+def test_an_eqa_episode_decides_as_it_always_has(name: str, tmp_path: Path) -> None:
+    seed, settings, hidden, expected = EPISODES[name]
+    scenario = make_scenario(generate_home(seed), seed, hidden=True).to_dict() if hidden else None
+    result = run_episode(RunRequest(seed, load_config(None, settings), out_root=tmp_path, scenario=scenario,
+                                    save_map=False))
+    decided = {key: result[key] for key in _DECIDED}
+    assert result["status"] == "answered", result["reason"]
+    assert _digest(decided) == expected, json.dumps(_without_timings(decided))[:4000]
+
+
+@pytest.mark.parametrize("task, variant", sorted(TABLETOP))
+def test_the_robot_explores_a_tabletop_as_it_always_has(task: str, variant: int) -> None:
+    row = run_robot(task, variant)
+    assert _digest(row) == TABLETOP[(task, variant)], json.dumps(_without_timings(row))[:4000]
