@@ -7,7 +7,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.stopping import StopDecision, fallback_decision
 from worlds.vocabulary import LETTERS

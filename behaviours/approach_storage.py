@@ -36,7 +36,7 @@ import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.mapping.occupancy import ExplorationMap
 from agent.observation import Observation

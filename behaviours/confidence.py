@@ -11,7 +11,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.stopping import ConformalRule, StoppingRule
 

@@ -33,13 +33,13 @@ from pathlib import Path
 import numpy as np
 import py_trees
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.planning.explore import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
 from agent.planning.semantic import FrontierWeightConfig, method_flags
 from agent.timing import StageTimer
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from agent.vlm.protocol import VisionLanguageModel
 from agent.eqa.stopping import BudgetRule, StoppingRule
 from behaviours.answer import Answer, AnswerFallback, ShouldStop

@@ -9,7 +9,7 @@ import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.explore import Candidates, ExploreConfig, plan_move, reachable_frontiers
 from agent.planning.frontier_choice import choose_frontier, kept_goal

@@ -7,7 +7,7 @@ import contextlib
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.timing import StageTimer
 
 

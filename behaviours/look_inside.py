@@ -7,7 +7,7 @@ storage, and a piece of that kind with a handle on a door or drawer has been see
 piece stands in: the furniture around it, `agent.perception.rooms`, else the room whose floor was
 seen around it, `agent.planning.room_goal.room_of_piece`; pieces seen in another room are left
 alone), this behaviour has the robot
-(`agent.acsg.robot.Robot`) drive to a stand clear of what the opening sweeps (`skills.stand`),
+(`skills.robot.Robot`) drive to a stand clear of what the opening sweeps (`skills.arm.stand`),
 along a path over the robot's map, open one of its doors or drawers, take frames while it stands
 open (a door held open by its handle, looked at with the head camera, then pushed shut from the
 same grasp; a drawer let go and looked into with the wrist camera, then closed), and fold the arm
@@ -48,8 +48,8 @@ import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
-from agent.acsg.robot import Robot, RobotConfig
+from behaviours import blackboard as bb
+from skills.robot import Robot, RobotConfig
 from worlds.bus.rpc import QueryFailed
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
@@ -58,11 +58,11 @@ from agent.perception.memory import STORAGE_CATEGORIES, Instance, InstanceMemory
 from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.planning.room_goal import RoomFloors, room_of_piece
 from agent.planning.route import Routes, routes_from
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from agent.vlm.mosaic import side_by_side
 from behaviours.approach_storage import ApproachConfig
-from skills.plan import SkillPlanError
-from skills.stand import StandConfig
+from skills.arm.plan import SkillPlanError
+from skills.arm.stand import StandConfig
 from worlds.vocabulary import room_kind
 
 log = logging.getLogger(__name__)
@@ -86,7 +86,7 @@ class LookInsideConfig:
     instance memory keeps nothing seen further than 4 m away, `MemoryConfig.max_depth_m`);
     ``skill_timeout_s``: how long one arm skill may run; ``min_look``: how far a part must stand
     open (rad for doors, m for drawers) for a frame of it to be worth the VLM's look; ``stand``:
-    where the base stands to open (`skills.stand`); ``max_parts``: doors and drawers of one piece
+    where the base stands to open (`skills.arm.stand`); ``max_parts``: doors and drawers of one piece
     opened in one act at most (a kitchen counter may have six); ``approach``: how the robot goes
     to look at storage seen farther off (`behaviours.approach_storage`)."""
 

@@ -12,9 +12,9 @@ import numpy as np
 
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from worlds.bus.codec import Message
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from behaviours.world_command import WorldCommand
 
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from worlds.bus.codec import Message
 from agent.observation import Observation, ObservationError
 from agent.timing import StageTimer
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from behaviours.world_command import WorldCommand
 
 

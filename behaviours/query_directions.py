@@ -14,7 +14,7 @@ import numpy as np
 from PIL import Image
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.prompts import YES_NO, gsv_prompt, lsv_prompt
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.observation import Observation

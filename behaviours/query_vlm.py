@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.observation import Observation

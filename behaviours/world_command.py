@@ -9,7 +9,7 @@ from py_trees.common import Status
 
 from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 
 
 class WorldCommand(py_trees.behaviour.Behaviour):

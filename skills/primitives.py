@@ -2,7 +2,7 @@
 object away to an idle spot and back, and move the wrist camera to look at a point.
 
 Each is a small `skills.base.ArmSkill`: what it needs from the `SkillTarget` on the blackboard, and
-which `skills.plan.ArmPlanner` method plans it. ``skill_name`` is the ACSG's primitive name
+which `skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the ACSG's primitive name
 (`agent.acsg.graph.PRIMITIVES`); the first docstring line is what ``homebot skills`` lists.
 """
 
@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 
 from agent.perception.geometry import DEFAULT_AMOUNT
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from skills.base import ArmSkill, SkillResult, SkillTarget
-from skills.plan import ArmPlanner, SkillPlan, SkillPlanError
+from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
 
 
 

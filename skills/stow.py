@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from skills.base import ArmSkill, SkillTarget
-from skills.plan import ArmPlanner, SkillPlan
+from skills.arm.plan import ArmPlanner, SkillPlan
 
 
 class Stow(ArmSkill):

@@ -9,7 +9,7 @@ import pytest
 import zenoh
 
 from worlds.bus.keys import Keys
-from agent.runtime.local_world import local_world
+from agent.app.runtime.local_world import local_world
 
 
 @pytest.fixture

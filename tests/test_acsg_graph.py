@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from agent.acsg.cli import main as acsg_main
+from agent.app.cli.acsg import main as acsg_main
 from agent.acsg.draw import draw_acsg, layout
 from agent.acsg.graph import (
     ACSG,

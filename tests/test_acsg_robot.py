@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from agent.acsg.graph import ACSG
-from agent.eval.robot_tabletop import in_world_ids, run_robot
+from agent.app.eval.robot_tabletop import in_world_ids, run_robot
 from agent.perception.memory import Instance, InstanceMemory
 
 pytestmark = pytest.mark.slow

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from agent.config import Config, load_config
+from agent.app.config import Config, load_config
 from agent.eqa.answers import StepScores
 from agent.eqa.calibration import (
     CALIBRATION_FORMAT,
@@ -19,7 +19,7 @@ from agent.eqa.calibration import (
     CalibrationError,
     read_calibration,
 )
-from agent.runtime.calibrations import calibration_for, made_with, mismatches, write_calibration
+from agent.app.runtime.calibrations import calibration_for, made_with, mismatches, write_calibration
 from agent.eqa.conformal import conformal_quantile, nonconformity
 
 

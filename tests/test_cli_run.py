@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from worlds.bus.session import free_tcp_endpoint
-from agent.cli import _parser, main, shortcut_overrides
-from agent.config import load_config
+from agent.app.cli import _parser, main, shortcut_overrides
+from agent.app.config import load_config
 from worlds.suite import plan_split, read_suite, write_suite
 
 
@@ -64,7 +64,7 @@ def test_suite_options_that_do_not_fit_are_refused_before_any_world_starts(
 def test_run_runs_the_suite_scenario_named_in_its_home(hidden_suite: Path, tmp_path: Path) -> None:
     entry = read_suite(hidden_suite)[1]
     done = subprocess.run(
-        [sys.executable, "-m", "agent.cli", "run", "--suite", str(hidden_suite), "--scenario", entry["id"],
+        [sys.executable, "-m", "agent.app.cli", "run", "--suite", str(hidden_suite), "--scenario", entry["id"],
          "--set", "episode.budget=1", "--stop", "budget", "--listen", free_tcp_endpoint(), "--out", str(tmp_path)],
         capture_output=True, text=True, timeout=600,
     )

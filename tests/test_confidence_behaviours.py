@@ -8,7 +8,7 @@ import py_trees
 import pytest
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.stopping import BudgetRule, ConformalRule, RelevanceRule
 from behaviours.answer import Answer, AnswerFallback

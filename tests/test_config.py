@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from agent.config import BusSettings, CameraSettings, Config, ConfigError, EpisodeSettings, load_config, merge
+from agent.app.config import BusSettings, CameraSettings, Config, ConfigError, EpisodeSettings, load_config, merge
 from agent.mapping.occupancy import OccupancyConfig
 from agent.mapping.tsdf import TsdfConfig
 from agent.planning.explore import ExploreConfig

@@ -15,8 +15,8 @@ import pytest
 
 from worlds.bus.keys import ANY_AGENT_TREE
 from worlds.bus.session import free_tcp_endpoint, open_session
-from agent.config import load_config
-from agent.runtime.run import RunRequest, run_episode
+from agent.app.config import load_config
+from agent.app.runtime.run import RunRequest, run_episode
 
 pytestmark = pytest.mark.slow
 
@@ -117,13 +117,13 @@ def test_killed_world_fails_the_episode_with_the_reason_within_five_seconds(tmp_
 def test_run_and_watch_from_the_command_line(tmp_path: Path) -> None:
     agent_endpoint = free_tcp_endpoint()
     run = subprocess.Popen(
-        [sys.executable, "-m", "agent.cli", "run", "--seed", "1", "--listen", agent_endpoint,
+        [sys.executable, "-m", "agent.app.cli", "run", "--seed", "1", "--listen", agent_endpoint,
          "--set", "episode.budget=8", "--out", str(tmp_path)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:
         watch = subprocess.run(
-            [sys.executable, "-m", "agent.cli", "watch", "--connect", agent_endpoint, "--once", "--json",
+            [sys.executable, "-m", "agent.app.cli", "watch", "--connect", agent_endpoint, "--once", "--json",
              "--timeout", "60"],
             capture_output=True, text=True, timeout=120,
         )
@@ -138,7 +138,7 @@ def test_run_and_watch_from_the_command_line(tmp_path: Path) -> None:
 
 
 def test_a_bad_setting_is_rejected_with_its_name() -> None:
-    done = subprocess.run([sys.executable, "-m", "agent.cli", "run", "--set", "map.resolution=fine"],
+    done = subprocess.run([sys.executable, "-m", "agent.app.cli", "run", "--set", "map.resolution=fine"],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "map.resolution" in done.stderr
@@ -158,7 +158,7 @@ def test_a_semantic_episode_shows_the_vlm_its_visual_prompts(tmp_path: Path) -> 
 
 
 def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
-    from agent.eval.explore import evaluate_explore
+    from agent.app.eval.explore import evaluate_explore
     from worlds.suite import plan_split, write_suite
 
     suite = write_suite(tmp_path / "suite", plan_split(2, [2], 50, ("suite",)))["suite"]

@@ -14,12 +14,12 @@ import py_trees
 import pytest
 
 from worlds.bus.rpc import QueryFailed
-from agent.config import load_config
+from agent.app.config import load_config
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.runtime.local_world import LocalWorld, local_world
-from agent.runtime.plots import save_map_png
-from agent.runtime.run import RunRequest, run_episode
-from agent.runtime.world_link import WorldLink
+from agent.app.runtime.local_world import LocalWorld, local_world
+from agent.app.runtime.plots import save_map_png
+from agent.app.runtime.run import RunRequest, run_episode
+from worlds.bus.link import WorldLink
 from worlds.evaluation import EpisodeRecord
 from worlds.freespace import clearance
 from worlds.home import HomeSpec, generate_home

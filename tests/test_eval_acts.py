@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from agent.eqa.stopping import BudgetRule
-from agent.cli import main
-from agent.eval.acts import cause, format_summary, summarise
+from agent.app.cli import main
+from agent.app.eval.acts import cause, format_summary, summarise
 
 
 def _act(looked: bool, closed: bool | None, stage: str | None = None, reason: str = "") -> dict:

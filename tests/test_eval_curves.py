@@ -6,7 +6,7 @@ import numpy as np
 
 from pathlib import Path
 
-from agent.eval.curves import (answer_after, coverage_at, coverage_curves, explore_panels, rooms_entered_at,
+from agent.app.eval.curves import (answer_after, coverage_at, coverage_curves, explore_panels, rooms_entered_at,
                                success_at, success_curves, target_seen_at, target_seen_curves, write_curves_csv)
 
 

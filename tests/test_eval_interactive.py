@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from agent.eval.interactive import COLUMNS, evaluate_interactive
+from agent.app.eval.interactive import COLUMNS, evaluate_interactive
 
 
 def test_rows_per_task_and_a_rerun_redoes_nothing(tmp_path: Path) -> None:

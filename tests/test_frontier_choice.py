@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agent.config import ConfigError, load_config
+from agent.app.config import ConfigError, load_config
 from agent.planning.frontier_choice import FrontierChoiceConfig, choose_frontier
 
 #: Two frontiers of equal weight, one 2 m away and one 12 m away, on opposite sides.

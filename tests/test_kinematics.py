@@ -15,9 +15,9 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from skills.bench_arm import bench_arm
-from skills.kinematics import ArmKinematics, arc_poses, line_poses
-from skills.trajectory import JointLimits, plan_trajectory
+from agent.app.bench.arm import bench_arm
+from skills.arm.kinematics import ArmKinematics, arc_poses, line_poses
+from skills.arm.trajectory import JointLimits, plan_trajectory
 
 JOINTS = ["lift_joint"] + [f"panda_joint{i}" for i in range(1, 8)]
 TCP = "panda_grasptarget"

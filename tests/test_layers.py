@@ -1,11 +1,18 @@
 """Imports point one way: read from every module's source (ast), never by importing it.
 
-The world is the bottom layer: it imports nothing of the agent, its behaviours or its skills (the
-wire both speak is `worlds.bus`). The pure libraries of the agent test with plain arrays, so they
-import nothing of py_trees, Zenoh, PyBullet, the settings, the runtime, the CLI, the evaluation,
-the behaviours or the skills. `STILL_UPWARD` names the modules that do so today and what they
-import; the list may only shrink: a module that stops is refused until it is taken off, and a new
-upward import fails at once.
+The layers, bottom to top (docs/architecture.md draws them):
+
+1. `worlds` — the simulated home, and `worlds.bus`, the wire both sides stand on. It imports
+   nothing of the agent, its behaviours or its skills.
+2. the pure libraries — `agent.{mapping, perception, planning, eqa, vlm, acsg, lfe}`, the small
+   shared modules beside them, and the arm's `skills.arm`. They test with plain arrays, so they
+   import no behaviour-tree, middleware or simulator framework, and nothing above them.
+3. `skills` — arm skills as behaviours, their registry and the scene-graph executor; then
+   `behaviours` — the EQA leaves and trees, which may use skills.
+4. `agent.app` — the composition root: command line, settings, runtime, evaluation, benchmarks.
+   It knows everything; nothing imports it.
+
+`STILL_UPWARD` names imports that break these rules today; the list may only shrink.
 """
 
 from __future__ import annotations
@@ -15,16 +22,15 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("agent", "behaviours", "skills", "worlds")
-PURE = ("agent.mapping", "agent.planning", "agent.eqa", "agent.acsg", "agent.lfe", "agent.perception", "agent.vlm")
-KEPT_OUT_OF_PURE = ("py_trees", "zenoh", "pybullet", "agent.config", "agent.runtime", "agent.cli", "agent.eval",
-                    "agent.bench", "behaviours", "skills", "worlds.bus", "worlds.sim", "worlds.server")
-#: Upward imports of pure libraries left to undo: module -> the imports it still makes.
-STILL_UPWARD = {
-    # the robot the act branch drives: arm skills and the world link in one class, to be split
-    "agent.acsg.robot": {"agent.runtime.world_link", "skills", "skills.idle_space", "skills.plan",
-                         "skills.primitives", "skills.stand", "skills.stow", "worlds.bus.rpc"},
-    # training-data generation runs homes in a process pool: orchestration, not a library
-    "agent.lfe.data": {"agent.runtime.pool"},
+APP = ("agent.app",)
+PURE = ("agent.mapping", "agent.planning", "agent.eqa", "agent.acsg", "agent.lfe", "agent.perception", "agent.vlm",
+        "agent.observation", "agent.timing", "agent.pose", "skills.arm")
+#: What a pure library never imports: frameworks, the live wire, the simulator, and every layer above.
+KEPT_OUT_OF_PURE = ("py_trees", "zenoh", "pybullet", "worlds.bus.rpc", "worlds.bus.session", "worlds.bus.liveness",
+                    "worlds.bus.link", "worlds.sim", "worlds.server", "agent.app", "behaviours", "skills")
+#: Upward imports left to undo: module -> the imports it still makes.
+STILL_UPWARD: dict[str, set[str]] = {
+    "agent.lfe.data": {"agent.app.runtime.pool"},
 }
 
 
@@ -48,22 +54,40 @@ def _within(name: str, prefixes: tuple[str, ...]) -> bool:
     return any(name == prefix or name.startswith(prefix + ".") for prefix in prefixes)
 
 
+def _upward(importers: tuple[str, ...], forbidden: tuple[str, ...], allowed: tuple[str, ...] = ()
+            ) -> dict[str, set[str]]:
+    """Modules within ``importers`` -> what they import of ``forbidden`` (less ``allowed``)."""
+    found = {module: {name for name in names if _within(name, forbidden) and not _within(name, allowed)}
+             for module, names in _imports().items() if _within(module, importers)}
+    return {module: names for module, names in found.items() if names}
+
+
 def test_the_world_imports_nothing_of_the_agent_its_behaviours_or_its_skills() -> None:
-    upward = {module: sorted(name for name in names if _within(name, ("agent", "behaviours", "skills")))
-              for module, names in _imports().items() if _within(module, ("worlds",))}
-    assert {module: names for module, names in upward.items() if names} == {}
+    assert _upward(("worlds",), ("agent", "behaviours", "skills")) == {}
 
 
-def test_pure_libraries_import_no_runtime_framework_or_composition_root() -> None:
-    upward = {module: {name for name in names if _within(name, KEPT_OUT_OF_PURE)}
-              for module, names in _imports().items() if _within(module, PURE)}
-    upward = {module: names for module, names in upward.items() if names}
-    assert upward == STILL_UPWARD
+def test_pure_libraries_import_no_framework_and_nothing_above_them() -> None:
+    assert _upward(PURE, KEPT_OUT_OF_PURE, allowed=("skills.arm",)) == STILL_UPWARD
+
+
+def test_skills_never_import_the_behaviours_above_them() -> None:
+    assert _upward(("skills",), ("behaviours",)) == {}
+
+
+def test_nothing_imports_the_composition_root() -> None:
+    assert _upward(("worlds", "behaviours", "skills") + PURE, APP) == STILL_UPWARD
+
+
+def test_every_agent_module_is_in_a_layer() -> None:
+    """A new top-level module of `agent` has to be placed: pure, or the composition root."""
+    loose = [module for module in _imports() if _within(module, ("agent",)) and module != "agent"
+             and not _within(module, PURE + APP)]
+    assert loose == []
 
 
 def test_the_check_sees_an_upward_import() -> None:
     """The reader finds what a module imports, absolute and from-imports alike."""
     imports = _imports()
     assert "worlds.bus.codec" in imports["worlds.server"]
-    assert "skills.stow" in imports["agent.acsg.robot"]
+    assert "skills.arm.plan" in imports["skills.robot"]
     assert len(imports) > 150

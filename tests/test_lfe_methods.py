@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import torch
 
-from agent.eval.coverage import SIZES, evaluate_coverage, format_table, jobs, model_digest, plot_curves
+from agent.app.eval.coverage import SIZES, evaluate_coverage, format_table, jobs, model_digest, plot_curves
 from agent.lfe.bellman import choose_frontier, plan
-from agent.lfe.bench import branches
+from agent.app.bench.lfe import branches
 from agent.lfe.coverage import CoverageConfig, TrueHome, fbe_near, run_coverage
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.methods import Method, make_chooser

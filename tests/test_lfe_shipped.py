@@ -9,9 +9,9 @@ import pytest
 from py_trees.common import Access, Status
 from scipy.stats import spearmanr
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
-from agent.eval.coverage import SEED_BASE
+from agent.app.eval.coverage import SEED_BASE
 from agent.lfe.coverage import CoverageConfig, Situation, TrueHome, fbe_near, run_coverage
 from agent.lfe.estimator import SHIPPED_MODEL, LearnedEstimator
 from agent.lfe.properties import label_frontiers

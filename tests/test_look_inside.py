@@ -13,10 +13,10 @@ import py_trees
 import pytest
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.observation import Observation
-from agent.runtime.local_world import LocalWorld, local_world
-from agent.runtime.world_link import WorldLink
+from agent.app.runtime.local_world import LocalWorld, local_world
+from worlds.bus.link import WorldLink
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.eqa.prompts import YES_NO, relevance_prompt
 from agent.vlm.protocol import VisualQuery

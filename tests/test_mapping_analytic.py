@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agent.config import ConfigError, load_config
+from agent.app.config import ConfigError, load_config
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.planning.explore import reachable_frontiers
 from boxroom import BoxRoom, survey, walls_with_doorway

@@ -14,12 +14,12 @@ import py_trees
 import pytest
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from worlds.bus.keys import Keys
 from worlds.bus.session import free_tcp_endpoint, open_session
-from agent.runtime.episode import EpisodeOutcome, EpisodeRunner
-from agent.runtime.snapshot import SNAPSHOT_VERSION, short
-from agent.watch import SnapshotError, parse_snapshot, render, watch
+from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner
+from agent.app.runtime.snapshot import SNAPSHOT_VERSION, short
+from agent.app.watch import SnapshotError, parse_snapshot, render, watch
 
 SNAPSHOT_FIELDS = {"id", "name", "type", "parent", "status", "message", "visited"}
 

@@ -18,9 +18,9 @@ from typing import Any
 
 import pytest
 
-from agent.config import load_config
-from agent.eval.robot_tabletop import run_robot
-from agent.runtime.run import RunRequest, run_episode
+from agent.app.config import load_config
+from agent.app.eval.robot_tabletop import run_robot
+from agent.app.runtime.run import RunRequest, run_episode
 from worlds.home import generate_home
 from worlds.scenario import make_scenario
 

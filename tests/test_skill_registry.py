@@ -55,19 +55,19 @@ def test_a_declared_skill_is_listed_and_loads(tmp_path: Path, monkeypatch: pytes
 
 def test_homebot_skills_lists_them_and_flags_broken_ones(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(_demo_package(tmp_path))}
-    done = subprocess.run([sys.executable, "-m", "agent.cli", "skills", "--json"], capture_output=True, text=True,
+    done = subprocess.run([sys.executable, "-m", "agent.app.cli", "skills", "--json"], capture_output=True, text=True,
                           env=env, timeout=60)
     rows = {row["name"]: row for row in json.loads(done.stdout)}
     assert rows["wave"]["summary"].startswith("Waves the gripper")
     assert rows["missing"]["summary"].startswith("BROKEN")
-    table = subprocess.run([sys.executable, "-m", "agent.cli", "skills"], capture_output=True, text=True,
+    table = subprocess.run([sys.executable, "-m", "agent.app.cli", "skills"], capture_output=True, text=True,
                            env=env, timeout=60)
     assert table.returncode == 1, "a broken skill should make the listing fail"
     assert "wave" in table.stdout and "demo_skills:Wave (demo-skills)" in table.stdout
 
 
 def test_bench_skills_reports_ik_and_trajectory_figures() -> None:
-    done = subprocess.run([sys.executable, "-m", "agent.cli", "bench", "skills", "--n", "3", "--json"],
+    done = subprocess.run([sys.executable, "-m", "agent.app.cli", "bench", "skills", "--n", "3", "--json"],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout)

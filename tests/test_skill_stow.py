@@ -8,9 +8,9 @@ import pytest
 import zenoh
 
 from worlds.bus.keys import Keys
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from skills.base import SkillTarget, run_skill
-from skills.plan import ArmPlanner, SkillPlanError
+from skills.arm.plan import ArmPlanner, SkillPlanError
 from skills.primitives import LookAt
 from skills.registry import load_skill
 from skills.stow import Stow

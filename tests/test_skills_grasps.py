@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis
-from skills.grasps import (
+from skills.arm.grasps import (
     FINGERTIP_M,
     HANDLE_TOP_M,
     TOP_PITCHES,

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from skills.idle_space import idle_spot, reach_along
-from skills.plan import SkillPlanError
+from skills.arm.idle_space import idle_spot, reach_along
+from skills.arm.plan import SkillPlanError
 
 
 def _table() -> np.ndarray:

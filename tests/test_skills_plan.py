@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis, moved_geometry
-from skills.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance
-from skills.plan import (
+from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance
+from skills.arm.plan import (
     APPROACH_M,
     READY,
     ArmPlanner,
@@ -20,7 +20,7 @@ from skills.plan import (
     base_transform,
     hand_bottom,
 )
-from skills.stand import stand_pose
+from skills.arm.stand import stand_pose
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig
 from worlds.robot_arm import STOWED, arm_spec, robot_description

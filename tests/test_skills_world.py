@@ -24,10 +24,10 @@ from agent.mapping.camera import back_project
 from agent.observation import Observation
 from agent.perception.geometry import PartGeometry, handle_geometry, top_grasp_point
 from agent.perception.memory import Instance, InstanceMemory
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from skills.base import SkillResult, SkillTarget, run_skill
-from skills.idle_space import idle_spot
-from skills.stand import stand_pose
+from skills.arm.idle_space import idle_spot
+from skills.arm.stand import stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
 from worlds.storage import StoragePlacement
 from worlds.tabletop import tabletop_variant

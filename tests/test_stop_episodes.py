@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from worlds.bus.session import free_tcp_endpoint
-from agent.config import Config, load_config
+from agent.app.config import Config, load_config
 from agent.eqa.answers import StepScores, steps_from_records
 from agent.eqa.calibration import Calibration, CalibrationEpisode, read_calibration
-from agent.runtime.calibrations import made_with, shipped_calibration, write_calibration
+from agent.app.runtime.calibrations import made_with, shipped_calibration, write_calibration
 from agent.eqa.stopping import ConformalRule, RelevanceRule, replay
-from agent.runtime.run import RunError, RunRequest, run_episode
+from agent.app.runtime.run import RunError, RunRequest, run_episode
 from worlds.suite import plan_split, write_suite
 from worlds.vocabulary import LETTERS
 
@@ -118,7 +118,7 @@ def test_an_interrupted_calibration_resumes_without_redoing_finished_episodes(tm
     suite = write_suite(tmp_path / "suite", plan_split(3, [3], 70, ("calib",)))["calib"]
     out = tmp_path / "cal" / "calibration.json"
     episodes = out.with_name("calibration.episodes.jsonl")
-    command = [sys.executable, "-m", "agent.cli", "calibrate", "--suite", str(suite), "--workers", "1",
+    command = [sys.executable, "-m", "agent.app.cli", "calibrate", "--suite", str(suite), "--workers", "1",
                "--set", "episode.budget=3", "--out", str(out)]
     first = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.monotonic() + 120
@@ -142,7 +142,7 @@ def test_an_interrupted_calibration_resumes_without_redoing_finished_episodes(tm
 
 @pytest.mark.slow
 def test_eval_stop_writes_the_sweep_and_the_coverage_table_and_resumes(tmp_path: Path) -> None:
-    from agent.eval.stop import EPSILONS, evaluate_stop
+    from agent.app.eval.stop import EPSILONS, evaluate_stop
 
     suite = write_suite(tmp_path / "suite", plan_split(2, [2], 80, ("test",)))["test"]
     config = load_config(overrides=["bus.listen=[]", "episode.budget=3"])
@@ -170,13 +170,13 @@ def test_eval_stop_writes_the_sweep_and_the_coverage_table_and_resumes(tmp_path:
 @pytest.mark.slow
 def test_calibration_workers_join_running_worlds_given_by_endpoint(tmp_path: Path) -> None:
     from agent.eqa.calibration import CalibrationError
-    from agent.eval.calibrate import calibrate
-    from agent.eval.runner import WorldAddress
+    from agent.app.eval.calibrate import calibrate
+    from agent.app.eval.runner import WorldAddress
 
     suite = write_suite(tmp_path / "suite", plan_split(2, [2], 90, ("calib",)))["calib"]
     config = load_config(overrides=["bus.listen=[]", "episode.budget=2", "bus.world_start_timeout_s=3"])
     endpoint = free_tcp_endpoint()
-    world = subprocess.Popen([sys.executable, "-m", "agent.cli", "world", "--namespace", "homebot/far",
+    world = subprocess.Popen([sys.executable, "-m", "agent.app.cli", "world", "--namespace", "homebot/far",
                               "--listen", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         calibration = calibrate(suite, tmp_path / "joined.json", 2, config,

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from agent.config import ConfigError, load_config
+from agent.app.config import ConfigError, load_config
 from agent.eqa.answers import AnswerLog, StepScores
 from agent.eqa.stopping import (
     BudgetRule,

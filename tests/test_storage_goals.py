@@ -10,7 +10,7 @@ import py_trees
 import pytest
 from py_trees.common import Access, Status
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import InstanceLabel, Observation

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skills.trajectory import JointLimits, JointTrajectory, plan_trajectory
+from skills.arm.trajectory import JointLimits, JointTrajectory, plan_trajectory
 
 TOLERANCE = 1.01  # finite differences of a jerk-limited motion stay within its limits; 1 % for rounding
 

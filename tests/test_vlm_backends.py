@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from agent.config import ConfigError, merge
+from agent.app.config import ConfigError, merge
 from agent.vlm.backends import FACTORIES, make_vlm
 from agent.vlm.errors import VLMError
 from agent.vlm.openai_backend import OpenAIVLM

@@ -1,6 +1,6 @@
 """The simulated VLM's measured properties (docs/vlm-sim.md) at its default parameters, on frames
 rendered in PyBullet from 24 generated homes: three questions a home, each shown from where its
-answer shows and from as many spots anywhere (`agent.eval.vlm_cases`)."""
+answer shows and from as many spots anywhere (`agent.app.eval.vlm_cases`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from agent.eval.vlm_cases import home_cases
+from agent.app.eval.vlm_cases import home_cases
 from agent.vlm.measure import Case, Report, measure, roc_auc, room_judgement
 from agent.vlm.sim import SimParams, SimulatedVLM
 

@@ -2,7 +2,7 @@
 
 A thing picked away and put down in a door's swing blocks the door it was moved away for; put
 down beside the lane to a handle, it holds back the wrist reaching for it. `kept_clear` gives the
-points of that space, from what the instance memory holds, for `skills.idle_space.idle_spot` to
+points of that space, from what the instance memory holds, for `skills.arm.idle_space.idle_spot` to
 keep away from.
 """
 

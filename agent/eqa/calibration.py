@@ -2,7 +2,7 @@
 
 Conformal prediction promises coverage only for test episodes drawn like the calibration ones, so
 the file records the exploration policy and VLM the scores came from (`made_with`, filled in by
-`agent.runtime.calibrations` from the settings), and a run with a different policy or VLM refuses
+`agent.app.runtime.calibrations` from the settings), and a run with a different policy or VLM refuses
 it (`differences`). A checksum over the content catches a file edited or cut short by hand. Plain
 JSON and numbers: no settings, no runtime.
 """

@@ -2,7 +2,7 @@
 
 Every rule sees the episode's scores one step at a time and either lets the robot go on or returns
 a `StopDecision`. The same rule objects run inside the tree (behaviours.confidence) and over the
-recorded scores of full-budget episodes (agent.eval.stop), so an evaluation measures exactly what a
+recorded scores of full-budget episodes (agent.app.eval.stop), so an evaluation measures exactly what a
 robot would have done.
 
 - ``cp``: the running conformal prediction set; stop when one answer is left, which is the answer.

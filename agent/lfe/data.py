@@ -31,7 +31,7 @@ import numpy as np
 
 from agent.lfe.coverage import CoverageConfig, FrontierChooser, Situation, TrueHome, fbe_near, run_coverage
 from agent.lfe.properties import label_frontiers
-from agent.runtime.pool import as_finished
+from agent.app.runtime.pool import as_finished
 from agent.lfe.shards import shard_path, write_shard
 from agent.lfe.raster import coarse_cells, coarsening_factor, encode_map, frontier_pixel_mask
 from worlds.home import generate_home

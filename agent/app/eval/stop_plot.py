@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from agent.eval.stop import SweepPoint
+    from agent.app.eval.stop import SweepPoint
 
 STYLE = {"cp": ("tab:blue", "o", "CP (ours), ε swept"),
          "relevance": ("tab:orange", "s", "Relevance, threshold swept"),

@@ -2,7 +2,7 @@
 
 Every scenario runs to its full budget under each method; the figure is the success rate against
 normalised time, drawn from each episode's per-step scores, beside the share of episodes that have
-had the question's target in view by then, from the world's episode reports (`agent.eval.curves`).
+had the question's target in view by then, from the world's episode reports (`agent.app.eval.curves`).
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agent.config import Config
-from agent.eval.curves import TAU_GRID, Rates, explore_panels, plot_curves, write_curves_csv
-from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
+from agent.app.config import Config
+from agent.app.eval.curves import TAU_GRID, Rates, explore_panels, plot_curves, write_curves_csv
+from agent.app.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from worlds.suite import read_suite
 
 METHODS = ("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv")

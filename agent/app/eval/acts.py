@@ -24,9 +24,9 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from agent.config import load_config
+from agent.app.config import load_config
 from agent.eqa.answers import steps_from_records
-from agent.runtime.calibrations import calibration_for
+from agent.app.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StoppingRule, make_rule, replay
 from worlds.vocabulary import LETTERS
 

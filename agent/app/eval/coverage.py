@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from agent.acsg.metrics import mean_and_sem
-from agent.eval.runner import read_results
+from agent.app.eval.runner import read_results
 from agent.lfe.methods import Method
-from agent.runtime.pool import as_finished
+from agent.app.runtime.pool import as_finished
 
 #: Floor area (m²) of each size of home: the generator's 60-300 m² in three bands.
 SIZES: dict[str, tuple[float, float]] = {"small": (60.0, 100.0), "medium": (100.0, 180.0), "large": (180.0, 300.0)}

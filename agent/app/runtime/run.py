@@ -12,23 +12,23 @@ from typing import Any
 
 import py_trees
 
-from agent import blackboard as bb
+from behaviours import blackboard as bb
 from worlds.bus.keys import Keys, check_namespace
 from worlds.bus.rpc import QueryFailed
 from worlds.bus.session import free_tcp_endpoint, open_session
-from agent.config import Config
+from agent.app.config import Config
 from agent.eqa.answers import AnswerLog
 from agent.eqa.calibration import CalibrationError
-from agent.runtime.calibrations import calibration_for
+from agent.app.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StopRuleName, StoppingRule, make_rule
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.semantic import method_flags, new_semantic_map
-from agent.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
-from agent.runtime.plots import save_map_png
-from agent.runtime.record import SnapshotLog, write_json_atomic
+from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
+from agent.app.runtime.plots import save_map_png
+from agent.app.runtime.record import SnapshotLog, write_json_atomic
 from agent.timing import StageTimer
-from agent.runtime.world_link import WorldLink
-from agent.runtime.world_process import WorldProcess, WorldStartError
+from worlds.bus.link import WorldLink
+from agent.app.runtime.world_process import WorldProcess, WorldStartError
 from agent.vlm.backends import make_vlm
 from agent.vlm.errors import VLMError
 from agent.vlm.protocol import VisionLanguageModel

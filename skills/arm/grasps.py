@@ -20,7 +20,7 @@ object, closing across it) cannot:
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
-and ends on the first touch (`skills.plan.Step.touch`); what follows is planned from where the
+and ends on the first touch (`skills.arm.plan.Step.touch`); what follows is planned from where the
 top was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.

@@ -12,8 +12,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from skills.kinematics import ArmKinematics
-from skills.trajectory import JointLimits, plan_trajectory
+from skills.arm.kinematics import ArmKinematics
+from skills.arm.trajectory import JointLimits, plan_trajectory
 
 
 def bench_arm(urdf_xml: str, joints: Sequence[str], tcp_frame: str, n: int = 100, seed: int = 0, *,

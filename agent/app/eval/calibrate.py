@@ -16,11 +16,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agent.config import Config
+from agent.app.config import Config
 from agent.eqa.calibration import Calibration, CalibrationEpisode, CalibrationError, suite_identity
-from agent.runtime.calibrations import made_with, mismatches, write_calibration
-from agent.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
-from agent.runtime.record import write_json_atomic
+from agent.app.runtime.calibrations import made_with, mismatches, write_calibration
+from agent.app.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
+from agent.app.runtime.record import write_json_atomic
 from worlds.suite import read_suite
 
 FULL_BUDGET = "stop.rule=budget"  # calibration and evaluation episodes never stop early

@@ -1,6 +1,6 @@
 """Motion plans for the arm primitives: from where the arm is to the steps the world will run.
 
-Pure planning (Pinocchio IK from `skills.kinematics`, Ruckig trajectories from `skills.trajectory`),
+Pure planning (Pinocchio IK from `skills.arm.kinematics`, Ruckig trajectories from `skills.arm.trajectory`),
 no py_trees and no bus: given the arm's joint positions, the base's pose and a target perceived in
 the world frame, each ``plan_*`` method returns a `SkillPlan`, a list of `Step`:
 
@@ -24,17 +24,17 @@ The primitives (RoboEXP's seven, §2 of the spec):
   ahead of the pre-grasp, so closing starts where opening ended). The chain is solved from the
   closed grasp outwards whichever way the part moves, so a close takes the posture its open took.
   Grasp variants (the hand turned half a turn about its axis, tilted about the bar:
-  `skills.grasps.level_grasps`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
+  `skills.arm.grasps.level_grasps`) and the grasp's IK postures (structured seeds, then a few random restarts) are tried in
   turn until one chain is reachable throughout. With ``surface_z`` (a table's top) variants whose
-  hand would come down onto it are refused (`skills.grasps.HAND_BOXES`): a bar less than ~9 cm above the table
+  hand would come down onto it are refused (`skills.arm.grasps.HAND_BOXES`): a bar less than ~9 cm above the table
   cannot be grasped by a Panda hand 21 cm tall across its fingers. A drawer's bar is then
   grasped from above, the fingers closed and their tips brought down onto it until they touch
-  (`skills.grasps.handle_top_grasps`). An opening may end holding the handle (``hold``);
+  (`skills.arm.grasps.handle_top_grasps`). An opening may end holding the handle (``hold``);
   `ArmPlanner.plan_close_held` then pushes the part shut from that grasp;
 - pick an object away / back (`ArmPlanner.plan_pick`): top-down. Above the object, down onto its
   top (the fingers closing across the line of sight from the robot where the object fits that way,
   since perception places things worst along it; an object wider than the opening is held by the
-  closed fingertips brought down onto its top until they touch, `skills.grasps.object_grasps`),
+  closed fingertips brought down onto its top until they touch, `skills.arm.grasps.object_grasps`),
   close, lift, carry at height, lower until the object stands a little above where it should (the
   world puts a released object down onto whatever is under it), open, back up, ready (`READY`);
 - move the wrist camera (`ArmPlanner.plan_look`): one free move that puts the wrist camera's
@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 
 from agent.perception.geometry import PartGeometry, grasp_pose, moved_geometry
-from skills.grasps import (
+from skills.arm.grasps import (
     LIFT_OFF_M,
     TOUCH_SEARCH_M,
     UP,
@@ -75,8 +75,8 @@ from skills.grasps import (
     local_pose,
     object_grasps,
 )
-from skills.kinematics import ArmKinematics, IKMode, line_poses
-from skills.trajectory import JointLimits, plan_trajectory
+from skills.arm.kinematics import ArmKinematics, IKMode, line_poses
+from skills.arm.trajectory import JointLimits, plan_trajectory
 
 #: The arm folded up over the base's front edge, the hand 0.35 m ahead of the axis at 1.15 m pointing
 #: ahead and 38° down: where skills start from and return to, short of a table's far side and of
@@ -386,7 +386,7 @@ class ArmPlanner:
         """Pick the object whose top grasp point is ``object_point`` (world) and whose box is ``extent``
         (dx, dy, dz), and put it down so that that point ends ``clearance_m`` above ``place_point``.
         The fingers close around it where it fits between them, else their tips come down on its
-        top (`skills.grasps.object_grasps`); ``info["grasp"]`` says which.
+        top (`skills.arm.grasps.object_grasps`); ``info["grasp"]`` says which.
         ``surface_z``: the table's top, which free moves keep the hand above."""
         top = _vector(object_point, "object_point")
         place = _vector(place_point, "place_point")
@@ -500,9 +500,9 @@ class ArmPlanner:
         """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
         and (unless ``hold``) let go and back off.
 
-        The level grasps are tried first (`skills.grasps.level_grasps`); where none fits (a drawer's bar too low
+        The level grasps are tried first (`skills.arm.grasps.level_grasps`); where none fits (a drawer's bar too low
         over a table for the hand across it), a drawer's bar is grasped from above
-        (`skills.grasps.handle_top_grasps`). Whichever way the part moves, the chain is solved
+        (`skills.arm.grasps.handle_top_grasps`). Whichever way the part moves, the chain is solved
         from the closed grasp outwards (the grasp, then the part's path to its open end, then the
         straight lines off either end of it) and the pieces are put in the order the arm runs
         them; so closing a part takes the posture its opening took, which is known to reach along

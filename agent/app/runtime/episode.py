@@ -17,8 +17,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from agent import blackboard as bb
-from agent.runtime.snapshot import snapshot
+from behaviours import blackboard as bb
+from agent.app.runtime.snapshot import snapshot
 
 log = logging.getLogger(__name__)
 

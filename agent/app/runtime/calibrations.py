@@ -13,11 +13,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from agent.config import Config
+from agent.app.config import Config
 from agent.eqa.calibration import Calibration, CalibrationError, differences, read_calibration
-from agent.runtime.record import write_json_atomic
+from agent.app.runtime.record import write_json_atomic
 
-SHIPPED_DIR = Path(__file__).resolve().parent.parent / "data"
+SHIPPED_DIR = Path(__file__).resolve().parents[2] / "data"
 
 
 def made_with(config: Config) -> dict[str, Any]:

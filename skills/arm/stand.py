@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.perception.geometry import PartGeometry, grasp_pose, part_motion
-from skills.grasps import hand_corners
-from skills.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
+from skills.arm.grasps import hand_corners
+from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
 
 #: Steps along an opening at which the swept front is checked against the base.
 SWEEP_SAMPLES = 12

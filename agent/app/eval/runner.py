@@ -26,9 +26,9 @@ from typing import Any
 
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
-from agent.config import Config, load_config
-from agent.runtime.run import RunError, RunRequest, run_episode
-from agent.runtime.world_process import WorldProcess
+from agent.app.config import Config, load_config
+from agent.app.runtime.run import RunError, RunRequest, run_episode
+from agent.app.runtime.world_process import WorldProcess
 
 log = logging.getLogger(__name__)
 

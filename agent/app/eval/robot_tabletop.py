@@ -1,6 +1,6 @@
 """One tabletop variant explored by the robot in PyBullet, scored against the scene's ground truth.
 
-The robot (`agent.acsg.robot.Robot`) knows the scene only through the bus: head and wrist frames,
+The robot (`skills.robot.Robot`) knows the scene only through the bus: head and wrist frames,
 the arm's state, the robot's description. The world runs in a thread of this process
 (`local_world`), so that once the exploration is over the evaluation can read where every object
 and part really ended up, which the agent never could.
@@ -22,10 +22,10 @@ from agent.acsg.decision import RuleDecisionModule
 from agent.acsg.explore import explore
 from agent.acsg.graph import ACSG, from_ground_truth
 from agent.acsg.metrics import episode_metrics
-from agent.acsg.robot import Robot
+from skills.robot import Robot
 from agent.perception.memory import InstanceMemory
-from agent.runtime.local_world import local_world
-from agent.runtime.world_link import WorldLink
+from agent.app.runtime.local_world import local_world
+from worlds.bus.link import WorldLink
 from worlds.facts import CLOSED_SHARE
 from worlds.sim import World
 from worlds.tabletop import tabletop_variant

@@ -10,7 +10,7 @@ py_trees behaviour (`skills.base.run_skill`) while this object waits:
 
 - open a door or drawer: the part's geometry from its handle (`handle_geometry`), the base slid to
   the part's `stand_pose` (at a table, where it already stands within reach) or, with a
-  `StandConfig`, driven to a stand clear of what the opening sweeps (`skills.stand.choose_stand`:
+  `StandConfig`, driven to a stand clear of what the opening sweeps (`skills.arm.stand.choose_stand`:
   storage standing in a room), along ``routes`` over the robot's map when it has them; a second
   look from there to refine the geometry (and, with a `StandConfig`, a second stand when the
   refined geometry cannot be opened from the first), the skill; then the wrist camera into the
@@ -62,12 +62,12 @@ from agent.perception.geometry import (
 from agent.perception.memory import Instance, InstanceMemory
 from agent.perception.voxels import centres
 from agent.planning.route import Routes
-from agent.runtime.world_link import WorldLink
+from worlds.bus.link import WorldLink
 from skills import base as skill_base
-from skills.idle_space import idle_spot, reach_along
-from skills.plan import ArmPlanner, SkillPlanError
+from skills.arm.idle_space import idle_spot, reach_along
+from skills.arm.plan import ArmPlanner, SkillPlanError
 from skills.primitives import PRIMITIVES
-from skills.stand import NoStandError, StandConfig, choose_stand, stand_pose
+from skills.arm.stand import NoStandError, StandConfig, choose_stand, stand_pose
 from skills.stow import Stow
 
 log = logging.getLogger(__name__)
@@ -99,7 +99,7 @@ class RobotConfig:
     would push shut again. ``idle_toward_robot_m``: how far from the object, towards the robot,
     the idle spot is sought first. ``stand``: where the base stands to open a part; None keeps
     the distance it has, slid along the front (at a table, where it already stands within reach),
-    a `StandConfig` drives it to a stand clear of the opening (`skills.stand`). ``hold_open``: the
+    a `StandConfig` drives it to a stand clear of the opening (`skills.arm.stand`). ``hold_open``: the
     parts not looked into with the wrist camera are opened holding the handle, looked at with the
     head camera so, and pushed shut from the same grasp: let go, a door may swing on past where
     it was pulled, and a second grasp, aimed from a look at how far it stands open, may miss.

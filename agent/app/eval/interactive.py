@@ -9,7 +9,7 @@ The executor says what perceives and acts:
 - ``symbolic``: the symbolic tabletop of `agent.acsg.symbolic`, i.e. perfect perception and skills
   that never fail. It measures the decision logic and the action stack alone: an upper bound for
   the robot, and the reference a robot run is read against.
-- ``robot``: the robot in PyBullet (`agent.eval.robot_tabletop`): head and wrist cameras fused in
+- ``robot``: the robot in PyBullet (`agent.app.eval.robot_tabletop`): head and wrist cameras fused in
   the instance memory, the arm skills planned from them. Scenes run in ``workers`` processes,
   each with its own world.
 """
@@ -29,8 +29,8 @@ from agent.acsg.explore import explore
 from agent.acsg.graph import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene
-from agent.eval.runner import read_results
-from agent.runtime.pool import as_finished
+from agent.app.eval.runner import read_results
+from agent.app.runtime.pool import as_finished
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
 
 EXECUTORS = ("symbolic", "robot")
@@ -54,7 +54,7 @@ def run_symbolic(task: str, seed: int) -> dict[str, Any]:
 def run_scene(executor: str, task: str, seed: int) -> dict[str, Any]:
     """One result row: the scene explored by ``executor``."""
     if executor == "robot":
-        from agent.eval.robot_tabletop import run_robot  # PyBullet and the arm only when asked for
+        from agent.app.eval.robot_tabletop import run_robot  # PyBullet and the arm only when asked for
 
         metrics = run_robot(task, seed)
     else:

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from agent.config import Config, load_config
-from agent.runtime.run import RunRequest, run_episode
+from agent.app.config import Config, load_config
+from agent.app.runtime.run import RunRequest, run_episode
 from agent.timing import StageTimer
 from worlds.home import generate_home
 from worlds.spec import dump_spec
@@ -71,7 +71,7 @@ def bench_skills(n: int = 100, seed: int = 0, scenes: Sequence[tuple[str, int]] 
     ``scenes`` (tabletop task, variant), the robot explores each and every skill run is timed."""
     report = _bench_kinematics(n, seed)
     if scenes:
-        from agent.eval.robot_tabletop import run_robot
+        from agent.app.eval.robot_tabletop import run_robot
 
         runs = []
         for task, variant in scenes:
@@ -89,8 +89,8 @@ def bench_skills(n: int = 100, seed: int = 0, scenes: Sequence[tuple[str, int]] 
 
 
 def _bench_kinematics(n: int, seed: int) -> dict[str, Any]:
-    from skills.bench_arm import bench_arm
-    from skills.trajectory import JointLimits
+    from agent.app.bench.arm import bench_arm
+    from skills.arm.trajectory import JointLimits
     from worlds.robot import CameraConfig
     from worlds.robot_arm import arm_spec, homebot_urdf
 

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from worlds.bus.session import EndpointError, open_session
-from agent.config import Config, ConfigError, load_config
+from agent.app.config import Config, ConfigError, load_config
 
 DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"
 
@@ -26,11 +26,11 @@ def main(argv: list[str] | None = None) -> int:
 
         return scene_main(argv[1:])
     if argv[:1] == ["acsg"]:
-        from agent.acsg.cli import main as acsg_main
+        from agent.app.cli.acsg import main as acsg_main
 
         return acsg_main(argv[1:])
     if argv[:1] == ["lfe"]:
-        from agent.lfe.cli import main as lfe_main
+        from agent.app.cli.lfe import main as lfe_main
 
         return lfe_main(argv[1:])
     parser = _parser()
@@ -204,7 +204,7 @@ def _suite_config(args: argparse.Namespace) -> Config | None:
 
     Also checks ``--worlds`` and leaves the parsed addresses in ``args.world_addresses``.
     """
-    from agent.eval.runner import WorldAddress
+    from agent.app.eval.runner import WorldAddress
 
     if args.workers < 1:
         print(f"homebot: --workers must be at least 1, got {args.workers}", file=sys.stderr)
@@ -225,8 +225,8 @@ def _load(args: argparse.Namespace) -> Config:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from agent.runtime.run import RunError, RunRequest, run_episode
-    from agent.runtime.progress import StepPrinter
+    from agent.app.runtime.run import RunError, RunRequest, run_episode
+    from agent.app.runtime.progress import StepPrinter
 
     try:
         seed, scenario, what = _episode_choice(args)
@@ -300,7 +300,7 @@ def _skills(args: argparse.Namespace) -> int:
 
 
 def _watch(args: argparse.Namespace) -> int:
-    from agent.watch import watch
+    from agent.app.watch import watch
 
     session = open_session(connect=[args.connect])
     try:
@@ -341,7 +341,7 @@ def _suite_make(args: argparse.Namespace) -> int:
 
 
 def _eval_explore(args: argparse.Namespace) -> int:
-    from agent.eval.explore import evaluate_explore
+    from agent.app.eval.explore import evaluate_explore
     from worlds.suite import SuiteError
 
     config = _suite_config(args)
@@ -371,7 +371,7 @@ def _eval_explore(args: argparse.Namespace) -> int:
 
 def _calibrate(args: argparse.Namespace) -> int:
     from agent.eqa.calibration import CalibrationError
-    from agent.eval.calibrate import calibrate, episodes_path
+    from agent.app.eval.calibrate import calibrate, episodes_path
     from worlds.suite import SuiteError
 
     config = _suite_config(args)
@@ -396,7 +396,7 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 def _eval_stop(args: argparse.Namespace) -> int:
     from agent.eqa.calibration import CalibrationError
-    from agent.eval.stop import evaluate_stop
+    from agent.app.eval.stop import evaluate_stop
     from worlds.suite import SuiteError
 
     config = _suite_config(args)
@@ -426,7 +426,7 @@ def _eval_stop(args: argparse.Namespace) -> int:
 
 
 def _eval_interactive(args: argparse.Namespace) -> int:
-    from agent.eval.interactive import COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress
+    from agent.app.eval.interactive import COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress
     from worlds.tabletop import TASKS
 
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
@@ -445,8 +445,8 @@ def _eval_interactive(args: argparse.Namespace) -> int:
 
 
 def _eval_acts(args: argparse.Namespace) -> int:
-    from agent.eval.acts import default_stopping, format_summary, summarise
-    from agent.eval.runner import read_results
+    from agent.app.eval.acts import default_stopping, format_summary, summarise
+    from agent.app.eval.runner import read_results
 
     if not args.results.is_file():
         print(f"homebot eval acts: {args.results}: no such file", file=sys.stderr)
@@ -456,7 +456,7 @@ def _eval_acts(args: argparse.Namespace) -> int:
 
 
 def _eval_coverage(args: argparse.Namespace) -> int:
-    from agent.eval.coverage import evaluate_coverage, format_table, plot_curves, print_progress
+    from agent.app.eval.coverage import evaluate_coverage, format_table, plot_curves, print_progress
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
@@ -483,7 +483,7 @@ def _suite_tabletop(args: argparse.Namespace) -> int:
 
 
 def _bench_world(args: argparse.Namespace) -> int:
-    from agent.bench import dump, format_world_table
+    from agent.app.bench import dump, format_world_table
     from worlds.scene_cli import bench_world
 
     try:
@@ -497,7 +497,7 @@ def _bench_world(args: argparse.Namespace) -> int:
 
 
 def _bench_skills(args: argparse.Namespace) -> int:
-    from agent.bench import bench_skills, dump, format_skills_table
+    from agent.app.bench import bench_skills, dump, format_skills_table
 
     if args.n < 1:
         print(f"homebot bench skills: --n must be at least 1, got {args.n}", file=sys.stderr)
@@ -513,9 +513,9 @@ def _bench_skills(args: argparse.Namespace) -> int:
 
 
 def _bench_plan(args: argparse.Namespace) -> int:
-    from agent.bench import dump
-    from agent.eval.coverage import SEED_BASE, SIZES, home_area
-    from agent.lfe.bench import bench_plan, format_plan_table
+    from agent.app.bench import dump
+    from agent.app.eval.coverage import SEED_BASE, SIZES, home_area
+    from agent.app.bench.lfe import bench_plan, format_plan_table
 
     if args.steps < 1:
         print(f"homebot bench plan: --steps must be at least 1, got {args.steps}", file=sys.stderr)
@@ -548,12 +548,9 @@ def _tabletop_scenes(text: str) -> list[tuple[str, int]]:
 
 
 def _bench_step(args: argparse.Namespace) -> int:
-    from agent.bench import bench_step, dump, format_step_table
+    from agent.app.bench import bench_step, dump, format_step_table
 
     report = bench_step(_load(args), args.seed, args.area)
     print(dump(report) if args.json else format_step_table(report))
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -7,8 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from agent.config import CameraSettings
-from agent.runtime.world_link import WorldLink
+from agent.app.config import CameraSettings
+from worlds.bus.link import WorldLink
 
 log = logging.getLogger(__name__)
 

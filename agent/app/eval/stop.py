@@ -23,15 +23,15 @@ from typing import Any
 
 import numpy as np
 
-from agent.config import Config
+from agent.app.config import Config
 from agent.eqa.answers import StepScores, steps_from_records
 from agent.eqa.calibration import Calibration, read_calibration
-from agent.runtime.calibrations import check_fits
+from agent.app.runtime.calibrations import check_fits
 from agent.eqa.conformal import sequence_set
 from agent.eqa.stopping import (BudgetRule, ConformalRule, EntropyRule, RelevanceRule, StoppingRule,
                                 replay)
-from agent.eval.calibrate import full_budget_jobs, run_full_budget
-from agent.eval.runner import WorldAddress
+from agent.app.eval.calibrate import full_budget_jobs, run_full_budget
+from agent.app.eval.runner import WorldAddress
 from worlds.vocabulary import LETTERS
 
 # The paper's Fig. 9 sweeps its "ε" (a confidence level, ours is 1 − ε) from 0.27 to 0.99, the
@@ -157,7 +157,7 @@ def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: i
     _write_csv(out_dir / "stop-curves.csv", [asdict(p) for p in points])
     _write_csv(out_dir / "coverage.csv", coverage)
     _write_csv(out_dir / "steps-to-reach.csv", reach)
-    from agent.eval.stop_plot import plot_stop
+    from agent.app.eval.stop_plot import plot_stop
 
     plot_stop(out_dir / "stop-curves.png", points, coverage,
               f"Stopping rules on {suite.name} (n={len(results)}), calibrated on {len(calibration.episodes)}")
