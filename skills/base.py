@@ -1,18 +1,19 @@
 """Arm skills as py_trees behaviours: plan from the arm's state, then run the plan command by command.
 
-An `ArmSkill` reads what to act on from the blackboard key `SKILL_TARGET` (a `SkillTarget`: a part's
-geometry, an object's grasp point, a point to look at; all perceived, world frame) and writes how it
-went to `SKILL_RESULT` (a `SkillResult`). Its life, one tick at a time, never blocking for more
+An `ArmSkill` takes what to act on through its input ports (`skills.ports`: a part's geometry, an
+object's grasp point, a point to look at; all perceived, world frame) and gives how it went on its
+output port ``result`` (a `SkillResult`). Its life, one tick at a time, never blocking for more
 than a poll except the planning itself (tens to hundreds of milliseconds of IK):
 
-1. ask the world for the robot's description, once per `WorldLink` (the URDF, the arm's joints and
+1. ask the world for the robot's description, once per `SkillContext` (the URDF, the arm's joints and
    limits: the planner is built from the same text the world simulates), and for the arm's state;
 2. from the joints and the TCP's world pose, read where the base stands, and plan
    (`skills.arm.plan.ArmPlanner`): a planning error is FAILURE with its reason;
 3. send the plan's steps one after another (``arm_trajectory`` with the samples as an array,
    ``gripper``), RUNNING while each is in flight, and check every reply:
 
-   - a move that stopped on a contact, or fell short of its target by more than `BLOCKED_RAD` (a
+   - (`skills.replies.step_problem`) a move that stopped on a contact, or fell short of its target
+     by more than `BLOCKED_RAD` (a
      push too gentle for the world to report as a contact still holds the arm back), fails; but a
      touch grasp's approach (`Step.touch`) that stops on touching only what it reaches for, or is
      held back touching nothing else, has arrived (what follows is re-timed from where it stopped);
@@ -28,82 +29,37 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
 
 A failure while the hand holds something, or with its fingers closed, first opens the gripper
 (RUNNING until it has), so the base is not left tied to furniture and the next grasp starts with
-the fingers open, then fails. `run_skill` ticks a one-behaviour tree to the
-end, for scripts and tests.
+the fingers open, then fails. `skills.running.run_to_end` runs one skill to its end, for the
+scene-graph executor, scripts and tests.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-import weakref
-from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar
+from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
-import py_trees
-from py_trees.common import Access, Status
+from py_trees.common import Status
 
 from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
-from agent.perception.geometry import PartGeometry
-from worlds.bus.link import WorldLink
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, Step
+from skills.context import SkillContext
+from skills.ports import Port, PortedSkill, input_port, output_port
+from skills.replies import arm_state, step_problem, thing_name
 
 log = logging.getLogger(__name__)
 
-SKILL_TARGET = "skill_target"  # SkillTarget: what the next arm skill acts on
-SKILL_RESULT = "skill_result"  # SkillResult: how the last arm skill went
-
-#: A move that ends further than this (rad or m, any joint) from its last sample was held back.
-BLOCKED_RAD = 0.03
 #: A motion that ends further than this from its last sample is held where it is before letting go.
 HOLD_RAD = 0.01
 #: Re-time a move whose first sample is further than this from where the arm is.
 RETIME_RAD = 0.005
-#: The share of a planned opening or closing the part must make for the skill to count it done.
-MIN_PART_SHARE = 0.6
 #: Seconds allowed for a command beyond its motion's duration (the world runs faster than real time).
 COMMAND_SLACK_S = 30.0
 #: Fingers closer than this (m between them) are closed: a failure opens them again.
 FINGERS_CLOSED_M = 0.01
-#: What a grasp holds when it holds what the step expects, and what it says otherwise.
-_EXPECTED = {
-    "handle": (lambda label: label.get("category") == "handle", "not a handle"),
-    "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
-}
-
-
-@dataclass(frozen=True, eq=False)
-class SkillTarget:
-    """What an arm skill acts on, perceived, in the world frame (metres, radians).
-
-    - doors and drawers: ``geometry`` (the part as seen closed, `agent.perception.geometry`), and
-      ``amount``: how far to open it (OpenDoor, OpenDrawer; default `DEFAULT_AMOUNT`) or how far it
-      stands open now (CloseDoor, CloseDrawer; required). With ``geometry_is_open`` the geometry was
-      taken with the part open by ``amount``. ``surface_z``: the top of what the furniture stands
-      on, which the hand keeps above (optional);
-    - picks: ``object_point`` (the top-down grasp point, e.g. `top_grasp_point` of its points),
-      ``object_extent`` (dx, dy, dz of its points) and ``place_point``: where the grasp point is to
-      be once the object stands at its destination (PickAway: an idle spot; PickBack: where it was);
-    - the wrist camera: ``look_point`` and optionally ``standoff_m`` / ``pitch_deg`` (LookAt).
-
-    ``label`` names the target in messages ("drawer 12").
-    """
-
-    geometry: PartGeometry | None = None
-    amount: float | None = None
-    geometry_is_open: bool = False
-    surface_z: float | None = None
-    object_point: np.ndarray | None = None
-    object_extent: np.ndarray | None = None
-    place_point: np.ndarray | None = None
-    look_point: np.ndarray | None = None
-    standoff_m: float | None = None
-    pitch_deg: float | None = None
-    label: str = ""
-
-
 @dataclass(frozen=True, eq=False)
 class SkillResult:
     """How a skill went. ``ok`` and ``reason`` (why it failed; empty on success) as the ACSG's
@@ -127,32 +83,47 @@ class SkillResult:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-#: One planner per world link: building the kinematics takes ~20 ms, the description a query.
-_PLANNERS: weakref.WeakKeyDictionary[WorldLink, ArmPlanner] = weakref.WeakKeyDictionary()
+class ArmSkill(PortedSkill):
+    """Base of the arm primitives: subclasses set `skill_name`, add their `ports` to these, and
+    implement `plan` from the inputs."""
 
+    ports: tuple[Port, ...] = (
+        input_port("surface_z", float, "the top of what the furniture or object stands on, which the hand "
+                   "keeps above (m)", default=None),
+        input_port("label", str, "names the target in messages (\"drawer 12\")", default=""),
+        output_port("result", SkillResult, "how the skill went"),
+    )
 
-class ArmSkill(py_trees.behaviour.Behaviour):
-    """Base of the arm primitives: subclasses set `skill_name` and implement `plan`."""
-
-    skill_name: ClassVar[str] = ""
-
-    def __init__(self, link: WorldLink, name: str | None = None, *, planner: ArmPlanner | None = None,
-                 timeout_s: float = 10.0) -> None:
-        super().__init__(name or type(self).__name__)
-        self.link = link
+    def __init__(self, context: SkillContext, name: str | None = None, bindings: Mapping[str, Any] | None = None,
+                 *, timeout_s: float = 10.0) -> None:
+        """Args:
+            context: the world link, and the arm's planner shared by the skills run in it.
+            name: the node's name (default: the class name).
+            bindings: the ports' values or ``"{key}"``s (see `skills.ports`).
+            timeout_s: how long a query for the arm's state or the description may take.
+        """
+        super().__init__(context, name, bindings)
         self.timeout_s = timeout_s
-        self._planner = planner
-        self.blackboard = self.attach_blackboard_client(name=self.name)
-        self.blackboard.register_key(SKILL_TARGET, access=Access.READ)
-        self.blackboard.register_key(SKILL_RESULT, access=Access.WRITE)
         self._reset()
 
     # -- for subclasses ------------------------------------------------------------------------
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
-             target: SkillTarget) -> SkillPlan:
-        """The steps of this skill from joints ``q`` with the base at ``base_pose``; raise
-        SkillPlanError (or ValueError) naming what is missing or unreachable."""
+             inputs: Mapping[str, Any]) -> SkillPlan:
+        """The steps of this skill.
+
+        Args:
+            planner: the arm's planner.
+            q: the arm's joints now.
+            base_pose: where the base stands (x, y, yaw).
+            inputs: the input ports' values.
+
+        Returns:
+            The plan.
+
+        Raises:
+            SkillPlanError: (or ValueError) naming what is missing or unreachable.
+        """
         raise NotImplementedError
 
     # -- py_trees ------------------------------------------------------------------------------
@@ -164,7 +135,6 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         self._steps: list[Step] = []
         self._index = 0
         self._last: dict[str, Any] | None = None  # the latest arm state any reply carried
-        self._target: Any = None
         self._achieved: float | None = None
         self._contacts: list[dict[str, Any]] = []
         self._run_began: float | None = None
@@ -174,12 +144,10 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         self._request_error = ""
 
     def initialise(self) -> None:
+        super().initialise()
         self._reset()
-        self._target = self.blackboard.get(SKILL_TARGET) if self.blackboard.exists(SKILL_TARGET) else None
-        if self._planner is None:
-            self._planner = _PLANNERS.get(self.link)
         try:
-            if self._planner is None:
+            if self.context.planner is None:
                 self._pending = self.link.describe(self.timeout_s)
             else:
                 self._phase, self._pending = "state", self.link.request("arm_state", {}, self.timeout_s)
@@ -188,9 +156,8 @@ class ArmSkill(py_trees.behaviour.Behaviour):
             self._request_error = str(error)
 
     def update(self) -> Status:
-        if not isinstance(self._target, SkillTarget):
-            found = "nothing" if self._target is None else type(self._target).__name__
-            return self._fail(f"no target: the blackboard key {SKILL_TARGET!r} holds {found}, not a SkillTarget")
+        if self.input_problem():
+            return self._fail(self.input_problem())
         if self._pending is None:
             return self._fail(self._request_error or "no command in flight")
         try:
@@ -220,21 +187,21 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _described(self, message: Message) -> Status:
         try:
-            self._planner = ArmPlanner.from_description(message.meta)
+            self.context.planner = ArmPlanner.from_description(message.meta)
         except (ValueError, KeyError) as error:
             return self._fail(f"robot description: {error}")
-        _PLANNERS[self.link] = self._planner
         self._phase = "state"
         return self._send(lambda: self.link.request("arm_state", {}, self.timeout_s))
 
     def _planned(self, message: Message) -> Status:
-        assert self._planner is not None and self._target is not None
+        planner = self.context.planner
+        assert planner is not None
         began = time.perf_counter()
         try:
             self._last = arm_state(message.meta)
             q, tcp = self._last["q"], self._last["tcp_pose"]
-            base_pose = self._planner.base_pose_from(q, tcp)
-            self._plan = self.plan(self._planner, q, base_pose, self._target)
+            base_pose = planner.base_pose_from(q, tcp)
+            self._plan = self.plan(planner, q, base_pose, self.inputs)
         except (SkillPlanError, ValueError) as error:
             self._planning_ms = 1e3 * (time.perf_counter() - began)
             return self._fail(f"plan: {error}")
@@ -247,20 +214,21 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _next(self) -> Status:
         """Send the next step, or finish."""
-        assert self._planner is not None and self._last is not None
+        planner = self.context.planner
+        assert planner is not None and self._last is not None
         if self._index >= len(self._steps):
             return self._succeed()
         step = self._steps[self._index]
         if step.kind == "gripper":
             if step.action == "open" and self._last["final_error"] > HOLD_RAD and not self._holding_after_error:
                 self._holding_after_error = True  # hold where the arm is before letting go
-                hold = self._planner.hold(self._last["q"])
+                hold = planner.hold(self._last["q"])
                 return self._send(lambda: self._send_move(hold))
             self._holding_after_error = False
             return self._send(lambda: self.link.request("gripper", {"action": step.action}, self.timeout_s))
         if step.samples is not None and np.abs(step.samples[0] - self._last["q"]).max() > RETIME_RAD:
             try:
-                step = self._planner.retime(step, self._last["q"])
+                step = planner.retime(step, self._last["q"])
             except (RuntimeError, ValueError) as error:
                 return self._fail(f"{step.name}: re-timing it from where the arm is: {error}")
             self._steps[self._index] = step
@@ -289,54 +257,15 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         if self._holding_after_error and self._steps[self._index].kind == "gripper":
             return self._next()  # the hold is done; now let go
         step = self._steps[self._index]
-        problem = self._check(step, state, previous)
+        if step.kind != "gripper":
+            self._contacts += state["contacts"]
+        problem, achieved = step_problem(step, state, previous)
+        if achieved is not None:
+            self._achieved = achieved
         if problem:
             return self._fail(f"{step.name}: {problem}")
         self._index += 1
         return self._next()
-
-    def _check(self, step: Step, state: dict[str, Any], previous: dict[str, Any] | None) -> str:
-        """Why the reply to ``step`` means the skill failed ("" when it is fine)."""
-        held = state["held"]
-        if step.kind == "gripper":
-            if step.action == "close" and step.expect_held is None:
-                return "" if held is None else f"the fingers caught {_name(held)} closing before the approach"
-            if step.action == "close":
-                if held is None:
-                    return f"the gripper closed on nothing ({state['gripper_width'] * 1000:.0f} mm between the fingers)"
-                expected, otherwise = _EXPECTED[step.expect_held]
-                if not expected(held):
-                    return f"the gripper holds {_name(held)}, {otherwise}"
-            elif held is not None:
-                return f"the gripper still holds {_name(held)} after opening"
-            return ""
-        contacts = state["contacts"]
-        self._contacts += contacts
-        stopped = state["stopped_on_contact"] or state["final_error"] > BLOCKED_RAD
-        if step.touch and stopped and all(_EXPECTED[step.touch][0](c) for c in contacts):
-            return ""  # a touch grasp's approach found what it reaches for (or a touch too light to report)
-        if state["stopped_on_contact"]:
-            touched = ", ".join(f"{_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
-            return f"stopped on contact with {touched}"
-        if step.part_motion is not None:
-            motion = step.part_motion
-            achieved = motion.opening(state["tcp_pose"][:3, 3])
-            self._achieved = achieved
-            want = motion.end - motion.start
-            kind = motion.geometry.kind
-            if previous is not None and previous["held"] is not None and held is None:
-                return f"the gripper lost the {kind}'s handle"
-            if (achieved - motion.start) / want < MIN_PART_SHARE:
-                verb = "open" if want > 0 else "close"
-                return (f"the {kind} did not {verb}: its handle went {abs(achieved - motion.start):.3f} "
-                        f"{motion.unit} of the {abs(want):.3f} {motion.unit} planned")
-            return ""
-        if state["final_error"] > BLOCKED_RAD:
-            return (f"the arm stopped {state['final_error']:.3f} rad short of its target: something held it back "
-                    f"(a touch too light for the world to report as a contact)")
-        if previous is not None and previous["held"] is not None and held is None:
-            return f"the gripper lost {_name(previous['held'])}"
-        return ""
 
     # -- ends ----------------------------------------------------------------------------------
 
@@ -368,7 +297,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
 
     def _succeed(self) -> Status:
         result = self._result(True, "")
-        self.blackboard.set(SKILL_RESULT, result)
+        self.set_output("result", result)
         self.feedback_message = self.summary(result)
         return Status.SUCCESS
 
@@ -380,7 +309,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
             # do not stay tied to furniture, nor start the next grasp with closed fingers: open
             # first, then fail (see `_released`)
             held = last.get("held")
-            self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {_name(held)})"
+            self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {thing_name(held)})"
             try:
                 self._pending = self.link.request("gripper", {"action": "open"}, self.timeout_s)
             except QueryFailed as error:
@@ -399,7 +328,7 @@ class ArmSkill(py_trees.behaviour.Behaviour):
     def _failed(self, reason: str) -> Status:
         self._phase = "failed"
         result = self._result(False, reason)
-        self.blackboard.set(SKILL_RESULT, result)
+        self.set_output("result", result)
         self.feedback_message = reason
         self._pending = None
         log.info("%s", reason)
@@ -410,75 +339,3 @@ class ArmSkill(py_trees.behaviour.Behaviour):
         grasp = f", {result.info['grasp']} grasp" if "grasp" in result.info else ""
         return (f"{self.skill_name}: done in {result.execution_s:.1f} s ({result.info.get('motion_s', 0.0):.1f} s "
                 f"of motion, planned in {result.planning_ms:.0f} ms{grasp})")
-
-
-def arm_state(meta: dict[str, Any]) -> dict[str, Any]:
-    """The fields of an arm reply, checked: joints, TCP pose, held, stowed, and a motion's errors and contacts."""
-    try:
-        q = np.asarray(meta["positions"], dtype=float)
-        tcp = np.asarray(meta["tcp_pose"], dtype=float)
-    except (KeyError, TypeError, ValueError) as error:
-        raise ValueError(f"arm reply: missing or malformed {error}") from None
-    if q.ndim != 1 or tcp.shape != (4, 4) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(tcp))):
-        raise ValueError("arm reply: positions must be a vector and tcp_pose a finite 4x4 matrix")
-    held = meta.get("held")
-    return {
-        "q": q,
-        "tcp_pose": tcp,
-        "held": held if isinstance(held, dict) else None,
-        "gripper_width": float(meta.get("gripper_width", 0.0)),
-        "stowed": bool(meta.get("stowed", False)),
-        "final_error": float(meta.get("final_error", 0.0)),
-        "stopped_on_contact": bool(meta.get("stopped_on_contact", False)),
-        "contacts": [c for c in meta.get("contacts", []) if isinstance(c, dict)],
-    }
-
-
-def _name(label: dict[str, Any]) -> str:
-    return f"{label.get('category', 'something')} {label.get('id', '')}".strip()
-
-
-def run_skill(skill: type[ArmSkill] | ArmSkill, link: WorldLink, target: SkillTarget, timeout_s: float = 120.0,
-              tick_s: float = 0.002) -> SkillResult:
-    """Run one skill to its end in a tree of its own, ticking every ``tick_s``; its `SkillResult`.
-
-    ``skill`` is a skill class (made with ``link``) or a skill already made. A tick that raises, or
-    a skill still running after ``timeout_s``, gives a failed result saying so.
-    """
-    behaviour = skill(link) if isinstance(skill, type) else skill
-    client = py_trees.blackboard.Client(name=f"run_skill {behaviour.name}")
-    client.register_key(SKILL_TARGET, access=Access.WRITE)
-    client.register_key(SKILL_RESULT, access=Access.WRITE)
-    client.set(SKILL_TARGET, target)
-    client.set(SKILL_RESULT, None)
-    tree = py_trees.trees.BehaviourTree(behaviour)
-    deadline = time.monotonic() + timeout_s
-    name = getattr(behaviour, "skill_name", "") or behaviour.name
-    try:
-        while True:
-            try:
-                tree.tick()
-            except Exception as error:  # a bug in a tick: fail with it rather than hang
-                log.exception("%s raised", name)
-                behaviour.stop(Status.INVALID)
-                return SkillResult(False, f"{name}: {type(error).__name__}: {error}", name)
-            if behaviour.status != Status.RUNNING:
-                break
-            if time.monotonic() > deadline:
-                behaviour.stop(Status.INVALID)
-                return SkillResult(False, f"{name}: still running after {timeout_s:.0f} s", name)
-            time.sleep(tick_s)
-        result = client.get(SKILL_RESULT)
-        if not isinstance(result, SkillResult):
-            ok = behaviour.status == Status.SUCCESS
-            result = SkillResult(ok, "" if ok else behaviour.feedback_message, name)
-        return result
-    finally:
-        client.unregister_key(SKILL_TARGET)
-        client.unregister_key(SKILL_RESULT)
-
-
-def with_defaults(target: SkillTarget, **values: Any) -> SkillTarget:
-    """``target`` with the given fields filled in where it leaves them None."""
-    missing = {key: value for key, value in values.items() if getattr(target, key) is None}
-    return replace(target, **missing) if missing else target

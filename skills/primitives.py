@@ -1,85 +1,82 @@
 """The seven arm primitives of RoboEXP as behaviours: open and close doors and drawers, pick an
 object away to an idle spot and back, and move the wrist camera to look at a point.
 
-Each is a small `skills.base.ArmSkill`: what it needs from the `SkillTarget` on the blackboard, and
-which `skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the ACSG's primitive name
-(`agent.acsg.graph.PRIMITIVES`); the first docstring line is what ``homebot skills`` lists.
+Each is a small `skills.base.ArmSkill`: the input ports it adds to the base's, and which
+`skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the name it is registered under
+(pyproject.toml's ``homebot.skills`` entry points), which the scene-graph executor asks the
+registry for; the first docstring line is what ``homebot skills`` lists.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
-from agent.perception.geometry import DEFAULT_AMOUNT
-from worlds.bus.link import WorldLink
-from skills.base import ArmSkill, SkillResult, SkillTarget
+from agent.perception.geometry import DEFAULT_AMOUNT, PartGeometry
+from skills.base import ArmSkill, SkillResult
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
+from skills.ports import input_port
+
+_GEOMETRY = input_port("geometry", PartGeometry, "the door or drawer as perceived closed (its handle, hinge or "
+                       "slide), unless geometry_is_open")
 
 
-
-def _part(target: SkillTarget, kind: str, skill: str) -> None:
-    geometry = target.geometry
-    if geometry is None:
-        raise SkillPlanError(f"target: {skill} needs the {kind}'s geometry (SkillTarget.geometry)")
+def _check_kind(geometry: PartGeometry, label: str, kind: str, skill: str) -> None:
     if geometry.kind != kind:
         handle = "vertical" if geometry.kind == "door" else "horizontal"
-        raise SkillPlanError(f"target: {target.label or 'the part'} is a {geometry.kind} (its handle is {handle}), "
+        raise SkillPlanError(f"target: {label or 'the part'} is a {geometry.kind} (its handle is {handle}), "
                              f"not a {kind}: use {skill.replace(kind, geometry.kind)}")
-
-
-def _amount(target: SkillTarget, skill: str) -> float:
-    if target.amount is None:
-        raise SkillPlanError(f"target: {skill} needs the amount the part stands open (SkillTarget.amount)")
-    return float(target.amount)
 
 
 class _OpenPart(ArmSkill):
     """With ``hold`` the skill ends with the hand still on the handle, the part held open (for a
-    look while nothing can swing it on), for the same kind's close made with ``held``."""
+    look while nothing can swing it on), for the same kind's close bound with ``held``."""
 
     kind = ""
-
-    def __init__(self, link: WorldLink, name: str | None = None, *, hold: bool = False, **options: Any) -> None:
-        super().__init__(link, name, **options)
-        self.hold = hold
+    ports = ArmSkill.ports + (
+        _GEOMETRY,
+        input_port("amount", float, "how far to open it (m or rad; default: the kind's usual opening)", default=None),
+        input_port("hold", bool, "end with the hand still on the handle, the part held open", default=False),
+    )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
-             target: SkillTarget) -> SkillPlan:
-        _part(target, self.kind, self.skill_name)
-        amount = DEFAULT_AMOUNT[self.kind] if target.amount is None else float(target.amount)
-        assert target.geometry is not None
-        return planner.plan_open(q, base_pose, target.geometry, amount, surface_z=target.surface_z,
-                                 skill=self.skill_name, hold=self.hold)
+             inputs: Mapping[str, Any]) -> SkillPlan:
+        _check_kind(inputs["geometry"], inputs["label"], self.kind, self.skill_name)
+        amount = DEFAULT_AMOUNT[self.kind] if inputs["amount"] is None else inputs["amount"]
+        return planner.plan_open(q, base_pose, inputs["geometry"], amount, surface_z=inputs["surface_z"],
+                                 skill=self.skill_name, hold=inputs["hold"])
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; opened {_amount_text(self.kind, result.achieved)}"
 
 
 class _ClosePart(ArmSkill):
-    """With ``held`` the hand already holds the handle (an open made with ``hold``): it pushes the
+    """With ``held`` the hand already holds the handle (an open bound with ``hold``): it pushes the
     part shut from there instead of grasping it first."""
 
     kind = ""
-
-    def __init__(self, link: WorldLink, name: str | None = None, *, held: bool = False, **options: Any) -> None:
-        super().__init__(link, name, **options)
-        self.held = held
+    ports = ArmSkill.ports + (
+        _GEOMETRY,
+        input_port("amount", float, "how far it stands open now (m or rad)"),
+        input_port("geometry_is_open", bool, "the geometry was perceived with the part open by amount",
+                   default=False),
+        input_port("held", bool, "the hand already holds the handle (an open bound with hold)", default=False),
+    )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
-             target: SkillTarget) -> SkillPlan:
-        _part(target, self.kind, self.skill_name)
-        assert target.geometry is not None
-        amount = _amount(target, self.skill_name)
-        if self.held:
-            if target.geometry_is_open:
+             inputs: Mapping[str, Any]) -> SkillPlan:
+        geometry = inputs["geometry"]
+        _check_kind(geometry, inputs["label"], self.kind, self.skill_name)
+        if inputs["held"]:
+            if inputs["geometry_is_open"]:
                 raise SkillPlanError(f"target: {self.skill_name} of a held part needs its geometry as seen closed")
-            return planner.plan_close_held(q, base_pose, target.geometry, amount, surface_z=target.surface_z,
+            return planner.plan_close_held(q, base_pose, geometry, inputs["amount"], surface_z=inputs["surface_z"],
                                            skill=self.skill_name)
-        return planner.plan_close(q, base_pose, target.geometry, amount, geometry_is_open=target.geometry_is_open,
-                                  surface_z=target.surface_z, skill=self.skill_name)
+        return planner.plan_close(q, base_pose, geometry, inputs["amount"],
+                                  geometry_is_open=inputs["geometry_is_open"], surface_z=inputs["surface_z"],
+                                  skill=self.skill_name)
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; left open {_amount_text(self.kind, result.achieved)}"
@@ -120,14 +117,17 @@ class CloseDrawer(_ClosePart):
 
 
 class _Pick(ArmSkill):
+    ports = ArmSkill.ports + (
+        input_port("object_point", np.ndarray, "the object's top-down grasp point (x, y, z)"),
+        input_port("object_extent", np.ndarray, "the extent of its points (dx, dy, dz)"),
+        input_port("place_point", np.ndarray, "where the grasp point is to be once the object stands at its "
+                   "destination (x, y, z)"),
+    )
+
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
-             target: SkillTarget) -> SkillPlan:
-        missing = [name for name in ("object_point", "object_extent", "place_point") if getattr(target, name) is None]
-        if missing:
-            raise SkillPlanError(f"target: {self.skill_name} needs {', '.join(missing)}")
-        assert target.object_point is not None and target.object_extent is not None and target.place_point is not None
-        return planner.plan_pick(q, base_pose, target.object_point, target.object_extent, target.place_point,
-                                 surface_z=target.surface_z, skill=self.skill_name)
+             inputs: Mapping[str, Any]) -> SkillPlan:
+        return planner.plan_pick(q, base_pose, inputs["object_point"], inputs["object_extent"], inputs["place_point"],
+                                 surface_z=inputs["surface_z"], skill=self.skill_name)
 
     def summary(self, result: SkillResult) -> str:
         place = result.info.get("place_point")
@@ -151,16 +151,13 @@ class LookAt(ArmSkill):
     """Move the wrist camera to look at a point from a short standoff (into a drawer, past a door)."""
 
     skill_name = "move_camera"
+    ports = ArmSkill.ports + (
+        input_port("look_point", np.ndarray, "the point to look at (x, y, z)"),
+        input_port("standoff_m", float, "the camera's distance from it (default: the planner's)", default=None),
+        input_port("pitch_deg", float, "the camera's pitch below level (default: the planner's)", default=None),
+    )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
-             target: SkillTarget) -> SkillPlan:
-        if target.look_point is None:
-            raise SkillPlanError("target: move_camera needs look_point")
-        return planner.plan_look(q, base_pose, target.look_point, standoff_m=target.standoff_m,
-                                 pitch_deg=target.pitch_deg, surface_z=target.surface_z, skill=self.skill_name)
-
-
-#: Every primitive by its ACSG name.
-PRIMITIVES: dict[str, type[ArmSkill]] = {
-    skill.skill_name: skill for skill in (OpenDoor, CloseDoor, OpenDrawer, CloseDrawer, PickAway, PickBack, LookAt)
-}
+             inputs: Mapping[str, Any]) -> SkillPlan:
+        return planner.plan_look(q, base_pose, inputs["look_point"], standoff_m=inputs["standoff_m"],
+                                 pitch_deg=inputs["pitch_deg"], surface_z=inputs["surface_z"], skill=self.skill_name)

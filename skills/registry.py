@@ -6,17 +6,23 @@ installs beside homebot without touching it::
     [project.entry-points."homebot.skills"]
     wipe_table = "my_skills.wipe:WipeTable"
 
-`installed_skills` lists every entry without importing them; `load_skill` imports one and checks
-it is a py_trees behaviour. A broken entry (a missing module, a typo) is reported with its reason
-rather than hiding the other skills.
+The class is a `skills.ports.PortedSkill` (or an `skills.base.ArmSkill`, for a skill that plans arm
+motions) that declares its ports. `SkillRegistry` lists every entry without importing it, loads one
+by name and makes it with its ports bound, as BehaviorTree.CPP's factory makes a node by its
+registered name: the scene-graph executor, ``homebot skill run`` and skills put into a tree by
+settings all make their skills here. A broken entry (a missing module, a typo, a class that is no
+skill) and a name two packages both declare are reported by name, with their reason, rather than
+hiding the other skills or letting one silently win.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from importlib.metadata import EntryPoint, entry_points
+from typing import Any, Mapping
 
-import py_trees
+from skills.context import SkillContext
+from skills.ports import Port, PortedSkill
 
 GROUP = "homebot.skills"
 
@@ -33,38 +39,99 @@ class SkillEntry:
     target: str  # "module:Class"
     distribution: str
 
-    def load(self) -> type[py_trees.behaviour.Behaviour]:
+    def load(self) -> type[PortedSkill]:
+        """Import the skill's class and check it is a skill.
+
+        Returns:
+            The class.
+
+        Raises:
+            SkillError: it cannot be imported, or is not a `PortedSkill` with well-formed ports.
+        """
         module, _, attribute = self.target.partition(":")
+        where = f"skill {self.name!r} ({self.target}, from {self.distribution})"
         try:
             skill = EntryPoint(self.name, self.target, GROUP).load()
         except (ImportError, AttributeError) as error:
-            raise SkillError(f"skill {self.name!r} ({self.target}): cannot be loaded: {error}") from None
-        if not (isinstance(skill, type) and issubclass(skill, py_trees.behaviour.Behaviour)):
-            raise SkillError(f"skill {self.name!r} ({self.target}): {module}.{attribute} is not a py_trees behaviour class")
+            raise SkillError(f"{where}: cannot be loaded: {error}") from None
+        if not (isinstance(skill, type) and issubclass(skill, PortedSkill)):
+            raise SkillError(f"{where}: {module}.{attribute} is not a skill: a skill is a class derived from "
+                             f"skills.ports.PortedSkill that declares its ports")
+        if not all(isinstance(port, Port) for port in skill.ports):
+            raise SkillError(f"{where}: its ports must be made with skills.ports.input_port / output_port")
         return skill
-
-    def summary(self) -> str:
-        """The first line of the class docstring, or why the class cannot be loaded."""
-        try:
-            doc = self.load().__doc__ or ""
-        except SkillError as error:
-            return f"BROKEN: {error}"
-        return doc.strip().splitlines()[0] if doc.strip() else ""
 
 
 def installed_skills() -> list[SkillEntry]:
-    """Every skill declared by an installed distribution, sorted by name."""
+    """Every skill declared by an installed distribution, sorted by name (a name declared twice
+    appears twice)."""
     found = []
     for entry in entry_points(group=GROUP):
         distribution = entry.dist.name if entry.dist is not None else "?"
         found.append(SkillEntry(entry.name, entry.value, distribution))
-    return sorted(found, key=lambda e: e.name)
+    return sorted(found, key=lambda e: (e.name, e.distribution))
 
 
-def load_skill(name: str) -> type[py_trees.behaviour.Behaviour]:
-    """The behaviour class of the skill called ``name``."""
-    entries = {entry.name: entry for entry in installed_skills()}
-    if name not in entries:
-        known = ", ".join(entries) or "none"
-        raise SkillError(f"no skill called {name!r} is installed (installed: {known})")
-    return entries[name].load()
+class SkillRegistry:
+    """The installed skills by name, each class loaded once."""
+
+    def __init__(self, entries: list[SkillEntry] | None = None) -> None:
+        """Args:
+            entries: the skills to offer (default: every installed one).
+        """
+        self._entries: dict[str, list[SkillEntry]] = {}
+        for entry in installed_skills() if entries is None else entries:
+            self._entries.setdefault(entry.name, []).append(entry)
+        self._classes: dict[str, type[PortedSkill]] = {}
+
+    def names(self) -> list[str]:
+        """Every registered name, sorted."""
+        return sorted(self._entries)
+
+    def entries(self) -> list[SkillEntry]:
+        """Every entry, sorted by name (duplicates included)."""
+        return [entry for name in self.names() for entry in self._entries[name]]
+
+    def problem(self, name: str) -> str:
+        """Why the skill ``name`` cannot be used ("" when it can)."""
+        try:
+            self.load(name)
+        except SkillError as error:
+            return str(error)
+        return ""
+
+    def load(self, name: str) -> type[PortedSkill]:
+        """The class of the skill registered as ``name``.
+
+        Raises:
+            SkillError: no such skill, two packages declare it, or it cannot be loaded.
+        """
+        if name in self._classes:
+            return self._classes[name]
+        found = self._entries.get(name)
+        if not found:
+            raise SkillError(f"no skill called {name!r} is installed (installed: {', '.join(self.names()) or 'none'})")
+        if len(found) > 1:
+            places = " and ".join(f"{entry.target} (from {entry.distribution})" for entry in found)
+            raise SkillError(f"skill {name!r} is declared twice: {places}; uninstall or rename one")
+        self._classes[name] = found[0].load()
+        return self._classes[name]
+
+    def create(self, name: str, context: SkillContext, bindings: Mapping[str, Any] | None = None,
+               node_name: str | None = None) -> PortedSkill:
+        """Make the skill registered as ``name`` with its ports bound.
+
+        Args:
+            name: the registered name.
+            context: the world link and what skills share.
+            bindings: port name -> value, text, or ``"{key}"`` (see `skills.ports`).
+            node_name: its name in a tree (default: the class name).
+
+        Returns:
+            The skill, ready to tick.
+
+        Raises:
+            SkillError: see `load`.
+            skills.ports.PortError: a port bound wrongly.
+        """
+        return self.load(name)(context, node_name, bindings)

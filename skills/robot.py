@@ -5,8 +5,10 @@ the wrist camera looking into whatever a skill has just opened; both frames are 
 `InstanceMemory`, whose instances become the explorer's detections (`memory_detections`). The
 memory's ids are the ACSG's: the simulator's segmentation ids are never used to act.
 
-Each primitive is turned into a `SkillTarget` from what the memory holds, and the skill runs as a
-py_trees behaviour (`skills.base.run_skill`) while this object waits:
+Each primitive's ports are bound from what the memory holds, the skill is made by its registered
+name through the `SkillRegistry` (so an installed package may replace none of them silently: a
+name declared twice is an error) and runs as a py_trees behaviour (`skills.running.run_to_end`)
+while this object waits:
 
 - open a door or drawer: the part's geometry from its handle (`handle_geometry`), the base slid to
   the part's `stand_pose` (at a table, where it already stands within reach) or, with a
@@ -63,16 +65,20 @@ from agent.perception.memory import Instance, InstanceMemory
 from agent.perception.voxels import centres
 from agent.planning.route import Routes
 from worlds.bus.link import WorldLink
-from skills import base as skill_base
+from skills.base import SkillResult as ArmResult
+from skills.context import SkillContext
+from skills.registry import SkillRegistry
+from skills.replies import arm_state
+from skills.running import run_to_end
 from skills.arm.idle_space import idle_spot, reach_along
 from skills.arm.plan import ArmPlanner, SkillPlanError
-from skills.primitives import PRIMITIVES
 from skills.arm.stand import NoStandError, StandConfig, choose_stand, stand_pose
-from skills.stow import Stow
 
 log = logging.getLogger(__name__)
 
 SURFACE_LABELS = ("table", "counter")
+#: The skills the robot runs besides the exploration primitives, by their registered names.
+LOOK, STOW = "move_camera", "stow"
 #: The part seen nearest to where a skill says it left it, within this, is that part: a part held
 #: back (by the end of its travel, by something in its way) lags the hand by up to ~15 cm.
 SEEN_PART_M = 0.25
@@ -141,11 +147,12 @@ class Robot:
     config: RobotConfig = field(default_factory=RobotConfig)
     memory: InstanceMemory = field(default_factory=InstanceMemory)
     routes: Routes | None = None
+    skills: SkillRegistry = field(default_factory=SkillRegistry)
 
     def __post_init__(self) -> None:
         self.home: tuple[float, float, float] | None = None
         self.pose: tuple[float, float, float] | None = None  # where the base is, as the world last said
-        self._planner: ArmPlanner | None = None
+        self.context = SkillContext(self.link)
         self.opened: dict[int, _Opened] = {}
         self.away: dict[int, _Away] = {}
         self.vacated: dict[int, Box] = {}
@@ -199,13 +206,11 @@ class Robot:
         looked = False
         for offset in np.linspace(lo + width / 2, hi - width / 2, count):
             point = np.array([*(base + out * ahead + offset * side), top])
-            target = skill_base.SkillTarget(look_point=point, standoff_m=EDGE_STANDOFF_M, pitch_deg=90.0,
-                                            surface_z=top)
-            if self._skill("move_camera", target).ok:
+            if self._skill(LOOK, look_point=point, standoff_m=EDGE_STANDOFF_M, pitch_deg=90.0, surface_z=top).ok:
                 self._look("wrist")
                 looked = True
         if looked:
-            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=top))
+            self._skill(STOW, surface_z=top)
 
     # ---- SkillExecutor ------------------------------------------------------------------------
     def execute(self, call: SkillCall) -> SkillResult:
@@ -304,16 +309,15 @@ class Robot:
         return stand.pose, stand.amount
 
     def _open_from_here(self, part: Instance, geometry: PartGeometry, amount: float | None,
-                        hold: bool) -> skill_base.SkillResult:
-        return self._skill(f"open_{geometry.kind}", skill_base.SkillTarget(
-            geometry=geometry, amount=amount, surface_z=self._surface_z(geometry.handle_point),
-            label=f"{part.label} {part.id}"), hold=hold)
+                        hold: bool) -> ArmResult:
+        return self._skill(f"open_{geometry.kind}", geometry=geometry, amount=amount,
+                           surface_z=self._surface_z(geometry.handle_point), label=f"{part.label} {part.id}", hold=hold)
 
     def planner(self) -> ArmPlanner:
-        """The arm's planner, from the robot's description (asked for once)."""
-        if self._planner is None:
-            self._planner = ArmPlanner.from_description(self.link.describe().wait().meta)
-        return self._planner
+        """The arm's planner, from the robot's description (asked for once, shared with the skills)."""
+        if self.context.planner is None:
+            self.context.planner = ArmPlanner.from_description(self.link.describe().wait().meta)
+        return self.context.planner
 
     def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
                       moved: float = 0.0) -> float:
@@ -368,9 +372,9 @@ class Robot:
             return SkillResult(True)
         if not opened.held:
             self._drive(opened.stand)
-        result = self._skill(f"close_{opened.geometry.kind}", skill_base.SkillTarget(
-            geometry=opened.geometry, amount=opened.amount, surface_z=self._surface_z(opened.geometry.handle_point),
-            label=f"{part.label} {part.id}"), held=opened.held)
+        result = self._skill(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
+                             surface_z=self._surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
+                             held=opened.held)
         left = opened.amount if result.achieved is None else result.achieved
         motion = part_motion(opened.geometry, left) @ np.linalg.inv(part_motion(opened.geometry, opened.amount))
         self.memory.move(part.id, motion)
@@ -389,7 +393,7 @@ class Robot:
 
     def stow(self) -> None:
         """Fold the arm into the base, as it must be for the base to drive on freely."""
-        result = self._skill(Stow.skill_name, skill_base.SkillTarget())
+        result = self._skill(STOW)
         if not result.ok:
             raise SkillPlanError(result.reason)
 
@@ -417,10 +421,10 @@ class Robot:
         """The wrist camera at ``point``, its frame into the memory, the arm folded away again. A
         view that cannot be reached is skipped: the head camera saw what it could."""
         surface_z = self._surface_z(point)
-        looked = self._skill("move_camera", skill_base.SkillTarget(look_point=point, surface_z=surface_z))
+        looked = self._skill(LOOK, look_point=point, surface_z=surface_z)
         if looked.ok:
             self.views.append(self._look("wrist"))
-        self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=surface_z))
+        self._skill(STOW, surface_z=surface_z)
 
     # ---- picks ----------------------------------------------------------------------------------
     def _pick_away(self, call: SkillCall, obj: Instance) -> SkillResult:
@@ -457,9 +461,8 @@ class Robot:
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
         self._drive((stand_x, edge_y, self.home[2]))
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
-        result = self._skill(call.primitive, skill_base.SkillTarget(
-            object_point=top, object_extent=extent, place_point=place, surface_z=float(spot[2]),
-            label=f"{obj.label} {obj.id}"))
+        result = self._skill(call.primitive, object_point=top, object_extent=extent, place_point=place,
+                             surface_z=float(spot[2]), label=f"{obj.label} {obj.id}")
         if not result.ok:
             return SkillResult(False, result.reason)
         self.memory.move(obj.id, _translation(place - top))
@@ -475,10 +478,9 @@ class Robot:
         self._drive((away.stand_x, self.home[1], self.home[2]))
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
-        result = self._skill(call.primitive, skill_base.SkillTarget(
-            object_point=now, object_extent=away.extent, place_point=away.grasp_point,
-            surface_z=self._surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
-            label=f"{obj.label} {obj.id}"))
+        result = self._skill(call.primitive, object_point=now, object_extent=away.extent, place_point=away.grasp_point,
+                             surface_z=self._surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
+                             label=f"{obj.label} {obj.id}")
         if not result.ok:
             return SkillResult(False, result.reason)
         self.memory.move(obj.id, _translation(away.grasp_point - now))
@@ -501,21 +503,18 @@ class Robot:
             self._drive(self.home)
 
     # ---- the body -------------------------------------------------------------------------------
-    def _skill(self, name: str, target: skill_base.SkillTarget, **options: Any) -> skill_base.SkillResult:
-        """Run the skill ``name`` (made with ``options``, e.g. ``hold``) on ``target``; on a failure
-        after the arm moved, fold it away."""
-        skill = PRIMITIVES.get(name) or (Stow if name == Stow.skill_name else None)
-        if skill is None:
-            raise SkillPlanError(f"no skill named {name!r}")
+    def _skill(self, name: str, **bindings: Any) -> ArmResult:
+        """Make the skill registered as ``name`` with ``bindings`` for its ports and run it to its
+        end; on a failure after the arm moved, fold it away."""
         began = time.perf_counter()
-        made = skill(self.link, **options) if any(options.values()) else skill
-        result = skill_base.run_skill(made, self.link, target, timeout_s=self.config.skill_timeout_s)
+        skill = self.skills.create(name, self.context, bindings)
+        result = run_to_end(skill, timeout_s=self.config.skill_timeout_s)
         self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
                                  "execution_s": round(result.execution_s, 3),
                                  "wall_s": round(time.perf_counter() - began, 3),
                                  **({} if result.ok else {"reason": result.reason})})
-        if not result.ok and skill is not Stow and (result.steps_done or result.execution_s > 0):
-            self._skill(Stow.skill_name, skill_base.SkillTarget(surface_z=target.surface_z))  # out of the way
+        if not result.ok and name != STOW and (result.steps_done or result.execution_s > 0):
+            self._skill(STOW, surface_z=bindings.get("surface_z"))  # out of the way
         return result
 
     def _look(self, camera: str) -> Observation:
@@ -541,10 +540,9 @@ class Robot:
         as it would have). Folding it first every time would do the same."""
         reply = self._move_base(pose, routes)
         if not reply.get("reached") and not any(opened.geometry.kind == "door" for opened in self.opened.values()):
-            arm = skill_base.arm_state(self.link.call("arm_state", {}).meta)
+            arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
-                self._skill(Stow.skill_name,
-                            skill_base.SkillTarget(surface_z=self._surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)))
+                self._skill(STOW, surface_z=self._surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M))
                 reply = self._move_base(pose, routes)
         if not reply.get("reached"):
             touched = (reply.get("contact") or {}).get("category", "something")

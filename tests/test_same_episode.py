@@ -22,6 +22,7 @@ from agent.app.config import load_config
 from agent.app.eval.robot_tabletop import run_robot
 from agent.app.runtime.run import RunRequest, run_episode
 from worlds.home import generate_home
+from worlds.bus.session import free_tcp_endpoint
 from worlds.scenario import make_scenario
 
 pytestmark = pytest.mark.slow
@@ -58,7 +59,8 @@ def _digest(record: dict[str, Any]) -> str:
 def test_an_eqa_episode_decides_as_it_always_has(name: str, tmp_path: Path) -> None:
     seed, settings, hidden, expected = EPISODES[name]
     scenario = make_scenario(generate_home(seed), seed, hidden=True).to_dict() if hidden else None
-    result = run_episode(RunRequest(seed, load_config(None, settings), out_root=tmp_path, scenario=scenario,
+    listen = f'bus.listen=["{free_tcp_endpoint()}"]'  # beside any agent already on the default port
+    result = run_episode(RunRequest(seed, load_config(None, [*settings, listen]), out_root=tmp_path, scenario=scenario,
                                     save_map=False))
     decided = {key: result[key] for key in _DECIDED}
     assert result["status"] == "answered", result["reason"]

@@ -9,10 +9,11 @@ import zenoh
 
 from worlds.bus.keys import Keys
 from worlds.bus.link import WorldLink
-from skills.base import SkillTarget, run_skill
+from skills.context import SkillContext
+from skills.running import run_to_end
 from skills.arm.plan import ArmPlanner, SkillPlanError
 from skills.primitives import LookAt
-from skills.registry import load_skill
+from skills.registry import SkillRegistry
 from skills.stow import Stow
 
 
@@ -27,13 +28,14 @@ def link(world: tuple[zenoh.Session, Keys]) -> Iterator[WorldLink]:
 
 def test_stow_folds_the_arm_back_after_a_look(link: WorldLink) -> None:
     assert link.call("arm_state").meta["stowed"]
-    looked = run_skill(LookAt, link, SkillTarget(look_point=(0.0, 0.0, 0.8)), timeout_s=60)
+    context = SkillContext(link)
+    looked = run_to_end(LookAt(context, bindings={"look_point": (0.0, 0.0, 0.8)}), timeout_s=60)
     assert looked.ok, looked.reason
     assert not link.call("arm_state").meta["stowed"]
-    stowed = run_skill(Stow, link, SkillTarget(surface_z=0.75), timeout_s=60)  # the table top: keep clear of it
+    stowed = run_to_end(Stow(context, bindings={"surface_z": 0.75}), timeout_s=60)  # the table top: keep clear of it
     assert stowed.ok, stowed.reason
     assert link.call("arm_state").meta["stowed"]
-    assert load_skill("stow") is Stow
+    assert SkillRegistry().load("stow") is Stow
 
 
 def test_a_goal_outside_the_limits_is_refused_by_name(link: WorldLink) -> None:

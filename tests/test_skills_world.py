@@ -25,7 +25,10 @@ from agent.observation import Observation
 from agent.perception.geometry import PartGeometry, handle_geometry, top_grasp_point
 from agent.perception.memory import Instance, InstanceMemory
 from worlds.bus.link import WorldLink
-from skills.base import SkillResult, SkillTarget, run_skill
+from skills.base import SkillResult
+from skills.context import SkillContext
+from skills.ports import PortError
+from skills.running import run_to_end
 from skills.arm.idle_space import idle_spot
 from skills.arm.stand import stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
@@ -91,9 +94,9 @@ def _perceive_part(link: WorldLink, scene: TabletopScene, placement: StoragePlac
     return memory, geometry, _surface_z(memory), observation
 
 
-def _run(skill: type, link: WorldLink, target: SkillTarget) -> SkillResult:
+def _run(skill: type, link: WorldLink, **bindings: object) -> SkillResult:
     began = time.perf_counter()
-    result = run_skill(skill, link, target, timeout_s=120.0)
+    result = run_to_end(skill(SkillContext(link), bindings=bindings), timeout_s=120.0)
     TIMINGS.append(f"{skill.skill_name}: ok={result.ok} plan {result.planning_ms:.0f} ms "
                    f"(IK {result.info.get('ik_ms', 0):.0f} ms / {result.info.get('ik_solves', 0)} solves, "
                    f"trajectories {result.info.get('trajectory_ms', 0):.0f} ms), run {result.execution_s:.2f} s "
@@ -119,22 +122,22 @@ def test_a_drawer_is_opened_looked_into_and_closed(link: WorldLink) -> None:
     assert geometry.kind == "drawer"
     closed = _pixels(observation, handle_id).mean(axis=0)
 
-    opened = _run(OpenDrawer, link, SkillTarget(geometry=geometry, amount=0.21, surface_z=surface_z))
+    opened = _run(OpenDrawer, link, geometry=geometry, amount=0.21, surface_z=surface_z)
     assert opened.ok, opened.reason
     assert opened.achieved is not None and opened.achieved >= 0.2 and opened.held is None
     shift = closed - _pixels(_observe(link, memory), handle_id).mean(axis=0)
     assert shift[1] >= 0.2 and abs(shift[0]) < 0.01 and abs(shift[2]) < 0.01  # out along -y, by 0.2 m or more
 
     inside = geometry.handle_point + (opened.achieved - 0.13) * geometry.normal - np.array([0.0, 0.0, 0.04])
-    looked = _run(LookAt, link, SkillTarget(look_point=inside))
+    looked = _run(LookAt, link, look_point=inside)
     assert looked.ok, looked.reason
     wrist = _observe(link, camera="wrist")
     camera = wrist.camera_to_world
     assert np.linalg.norm(camera[:3, 3] - inside) == pytest.approx(looked.info["standoff_m"], abs=0.02)
     assert cup in {label.id for label in wrist.labels} and (wrist.segmentation == cup).sum() > 300
 
-    closed_again = _run(CloseDrawer, link, SkillTarget(geometry=geometry, amount=opened.achieved,
-                                                       surface_z=surface_z))
+    closed_again = _run(CloseDrawer, link, geometry=geometry, amount=opened.achieved,
+                                                       surface_z=surface_z)
     assert closed_again.ok, closed_again.reason
     assert abs(closed_again.achieved) < 0.02
     shift = closed - _pixels(_observe(link), handle_id).mean(axis=0)
@@ -149,12 +152,12 @@ def test_a_door_is_swung_open_past_60_degrees_and_shut_again(link: WorldLink) ->
     assert geometry.kind == "door" and geometry.hinge_axis is not None
     assert _door_angle(_pixels(observation, door_id)) < math.radians(3)
 
-    opened = _run(OpenDoor, link, SkillTarget(geometry=geometry, surface_z=surface_z))
+    opened = _run(OpenDoor, link, geometry=geometry, surface_z=surface_z)
     assert opened.ok, opened.reason
     assert opened.achieved is not None and opened.achieved >= math.radians(60) and opened.held is None
     assert _door_angle(_pixels(_observe(link, memory), door_id)) >= math.radians(60)
 
-    closed = _run(CloseDoor, link, SkillTarget(geometry=geometry, amount=opened.achieved, surface_z=surface_z))
+    closed = _run(CloseDoor, link, geometry=geometry, amount=opened.achieved, surface_z=surface_z)
     assert closed.ok, closed.reason
     assert _door_angle(_pixels(_observe(link), door_id)) < math.radians(3)
 
@@ -186,7 +189,7 @@ def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) 
     near = top[:2] + 0.2 * toward_robot / np.linalg.norm(toward_robot)  # nearer the robot, away from the storage
     spot = idle_spot(table.points(), others, float(max(extent[:2])) / 2, near)
     place = np.array([spot[0], spot[1], top[2] + spot[2] - _surface_z(memory)])  # same height above the top
-    away = _run(PickAway, link, SkillTarget(object_point=top, object_extent=extent, place_point=place))
+    away = _run(PickAway, link, object_point=top, object_extent=extent, place_point=place)
     assert away.ok, away.reason
     assert away.held is None
     moved = _pixels(_observe(link, memory), can.instance_id).mean(axis=0)
@@ -194,8 +197,8 @@ def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) 
     assert abs(moved[2] - start[2]) < 0.01  # on the table, not on something else
 
     there = _nearest([inst for inst in memory.with_label("can") if inst.last_seen == memory.frame], place)
-    back = _run(PickBack, link, SkillTarget(object_point=top_grasp_point(there.points()),
-                                            object_extent=np.ptp(there.points(), axis=0), place_point=top))
+    back = _run(PickBack, link, object_point=top_grasp_point(there.points()),
+                                            object_extent=np.ptp(there.points(), axis=0), place_point=top)
     assert back.ok, back.reason
     returned = _pixels(_observe(link), can.instance_id).mean(axis=0)
     assert np.linalg.norm(returned - start) < 0.02
@@ -216,15 +219,15 @@ def test_a_drawer_too_low_for_the_level_grasp_is_opened_from_above_and_closed(li
     assert bar[2] - surface_z < 0.07  # the bar's centre 6 cm over the table: the level grasp reaches 10 cm below
     closed = _pixels(observation, handle_id).mean(axis=0)
 
-    opened = _run(OpenDrawer, link, SkillTarget(geometry=geometry, amount=0.21, surface_z=surface_z))
+    opened = _run(OpenDrawer, link, geometry=geometry, amount=0.21, surface_z=surface_z)
     assert opened.ok, opened.reason
     assert opened.info["grasp"] == "from above" and opened.achieved is not None and opened.achieved >= 0.2
     shift = closed - _pixels(_observe(link, memory), handle_id).mean(axis=0)
     assert shift[1] >= 0.2 and abs(shift[0]) < 0.01 and abs(shift[2]) < 0.01  # out along -y, by 0.2 m or more
     assert _contacts_other_than(opened, "handle") == []  # the hand touched neither table nor front
 
-    closed_again = _run(CloseDrawer, link, SkillTarget(geometry=geometry, amount=opened.achieved,
-                                                       surface_z=surface_z))
+    closed_again = _run(CloseDrawer, link, geometry=geometry, amount=opened.achieved,
+                                                       surface_z=surface_z)
     assert closed_again.ok, closed_again.reason
     assert closed_again.info["grasp"] == "from above" and abs(closed_again.achieved) < 0.02
     assert np.linalg.norm(closed - _pixels(_observe(link), handle_id).mean(axis=0)) < 0.02
@@ -233,7 +236,7 @@ def test_a_drawer_too_low_for_the_level_grasp_is_opened_from_above_and_closed(li
     # the bar taken 5 cm further out than it is: the closed fingertips come down on nothing, and open again
     short = replace(geometry, handle_point=geometry.handle_point + 0.05 * geometry.normal,
                     front_depth=geometry.front_depth + 0.05)
-    missed = _run(OpenDrawer, link, SkillTarget(geometry=short, amount=0.1, surface_z=surface_z))
+    missed = _run(OpenDrawer, link, geometry=short, amount=0.1, surface_z=surface_z)
     assert not missed.ok and "grasp the drawer handle: the gripper closed on nothing" in missed.reason, missed.reason
     assert link.call("arm_state").meta["gripper_width"] > 0.07
 
@@ -248,8 +251,8 @@ def test_a_box_wider_than_the_gripper_is_picked_away_by_its_top_and_put_back(lin
     toward_robot = np.array(observation.base_pose[:2]) - top[:2]
     spot = idle_spot(table.points(), others, float(max(extent[:2])) / 2, top[:2] + 0.2 * toward_robot)
     place = np.array([spot[0], spot[1], top[2] + spot[2] - _surface_z(memory)])
-    away = _run(PickAway, link, SkillTarget(object_point=top, object_extent=extent, place_point=place,
-                                            surface_z=_surface_z(memory)))
+    away = _run(PickAway, link, object_point=top, object_extent=extent, place_point=place,
+                                            surface_z=_surface_z(memory))
     assert away.ok, away.reason
     assert away.info["grasp"] == "fingertips-on-top" and away.held is None
     moved = _pixels(_observe(link, memory), box.instance_id).mean(axis=0)
@@ -257,8 +260,8 @@ def test_a_box_wider_than_the_gripper_is_picked_away_by_its_top_and_put_back(lin
     assert abs(moved[2] - start[2]) < 0.01  # on the table
 
     there = _nearest([inst for inst in memory.with_label("box") if inst.last_seen == memory.frame], place)
-    back = _run(PickBack, link, SkillTarget(object_point=top_grasp_point(there.points()), object_extent=extent,
-                                            place_point=top, surface_z=_surface_z(memory)))
+    back = _run(PickBack, link, object_point=top_grasp_point(there.points()), object_extent=extent,
+                                            place_point=top, surface_z=_surface_z(memory))
     assert back.ok, back.reason
     returned = _pixels(_observe(link), box.instance_id).mean(axis=0)
     assert np.linalg.norm(returned - start) < 0.02
@@ -269,21 +272,21 @@ def test_skills_fail_with_a_reason(link: WorldLink) -> None:
     placement = next(pl for _, pl in scene.storage if pl.model.part("drawer_1").upper > 0.21)
     memory, geometry, surface_z, _ = _perceive_part(link, scene, placement, "drawer_1")
 
-    nothing = _run(OpenDrawer, link, SkillTarget())
-    assert not nothing.ok and "open_drawer needs the drawer's geometry" in nothing.reason
-    wrong = _run(OpenDoor, link, SkillTarget(geometry=geometry))
+    with pytest.raises(PortError, match="open_drawer: port 'geometry' is required"):
+        OpenDrawer(SkillContext(link))
+    wrong = _run(OpenDoor, link, geometry=geometry)
     assert not wrong.ok and "is a drawer" in wrong.reason and "use open_drawer" in wrong.reason
 
     # the handle taken 5 cm further out than it is: the fingers close on air in front of it
     short = PartGeometry("drawer", geometry.handle_point + 0.05 * geometry.normal, geometry.handle_axis,
                          geometry.normal)
-    missed = _run(OpenDrawer, link, SkillTarget(geometry=short, amount=0.1, surface_z=surface_z))
+    missed = _run(OpenDrawer, link, geometry=short, amount=0.1, surface_z=surface_z)
     assert not missed.ok and "grasp the drawer handle: the gripper closed on nothing" in missed.reason
     assert missed.steps_done == 2 and missed.held is None
 
     far = PartGeometry("drawer", geometry.handle_point + np.array([0.0, 1.5, 0.0]), geometry.handle_axis,
                        geometry.normal)
-    unreachable = _run(OpenDrawer, link, SkillTarget(geometry=far, amount=0.1))
+    unreachable = _run(OpenDrawer, link, geometry=far, amount=0.1)
     assert not unreachable.ok and "plan: IK: grasp pose of drawer handle unreachable" in unreachable.reason
     assert unreachable.steps_done == 0
 
@@ -295,7 +298,7 @@ def test_a_door_blocked_by_an_obstacle_in_its_swing_does_not_open_and_is_let_go(
     door_id = placement.part_ids()[part_name]
     memory, geometry, surface_z, _ = _perceive_part(link, scene, placement, part_name)
 
-    blocked = _run(OpenDoor, link, SkillTarget(geometry=geometry, surface_z=surface_z))
+    blocked = _run(OpenDoor, link, geometry=geometry, surface_z=surface_z)
     assert not blocked.ok and "pull the door open: the door did not open" in blocked.reason, blocked.reason
     assert "let go of handle" in blocked.reason
     assert blocked.achieved is not None and math.radians(10) < blocked.achieved < math.radians(50)

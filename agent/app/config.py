@@ -51,6 +51,27 @@ class EpisodeSettings:
 
 
 @dataclass(frozen=True)
+class SkillPlug:
+    """An installed skill put into the EQA tree: ``skill`` (its registered name) runs right after
+    the node called ``after`` (a node name as `homebot watch` shows it), each time that node's
+    branch reaches it, with ``ports`` bound (values, or ``"{key}"`` of the blackboard); ``name``
+    names its node (default: the skill's class name)."""
+
+    skill: str = ""
+    after: str = ""
+    ports: dict[str, Any] = field(default_factory=dict)
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class TreeSettings:
+    """What the EQA tree holds beyond its own behaviours: ``skills`` put into it (see `SkillPlug`);
+    in TOML, one ``[[tree.skills]]`` table each."""
+
+    skills: tuple[SkillPlug, ...] = ()
+
+
+@dataclass(frozen=True)
 class Config:
     camera: CameraSettings = field(default_factory=CameraSettings)
     bus: BusSettings = field(default_factory=BusSettings)
@@ -62,6 +83,7 @@ class Config:
     frontier_weights: FrontierWeightConfig = field(default_factory=FrontierWeightConfig)
     vlm: VLMSettings = field(default_factory=VLMSettings)
     stop: StopConfig = field(default_factory=StopConfig)
+    tree: TreeSettings = field(default_factory=TreeSettings)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:
@@ -118,6 +140,12 @@ def _coerce(name: str, value: Any, hint: Any) -> Any:
     elif hint is str:
         if isinstance(value, str):
             return value
+    elif dataclasses.is_dataclass(hint):
+        if isinstance(value, dict):
+            return merge(hint(), value, f"{name}.")
+    elif origin is dict:
+        if isinstance(value, dict) and all(isinstance(key, str) for key in value):
+            return dict(value)
     elif origin is tuple:
         args = typing.get_args(hint)
         if isinstance(value, (list, tuple)):
@@ -125,7 +153,7 @@ def _coerce(name: str, value: Any, hint: Any) -> Any:
                 return tuple(_coerce(f"{name}[{i}]", v, args[0]) for i, v in enumerate(value))
             if len(value) == len(args):
                 return tuple(_coerce(f"{name}[{i}]", v, a) for i, (v, a) in enumerate(zip(value, args)))
-    type_name = getattr(hint, "__name__", str(hint)).replace("float", "number")
+    type_name = getattr(hint, "__name__", str(hint)).replace("float", "number").replace("dict", "table")
     raise ConfigError(f"config: {name}: expected {type_name}, got {value!r}")
 
 

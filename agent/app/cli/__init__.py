@@ -11,6 +11,7 @@ from typing import Any
 
 from worlds.bus.session import EndpointError, open_session
 from agent.app.config import Config, ConfigError, load_config
+from agent.app.cli.skill import add_skill_commands
 
 DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"
 
@@ -71,9 +72,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="accepted miscoverage ε of the conformal set (default 0.3; --set stop.epsilon=…)")
     run.set_defaults(handler=_run)
 
-    skills = commands.add_parser("skills", help="list the installed skills (the homebot.skills entry points)")
-    skills.add_argument("--json", action="store_true", help="print them as JSON")
-    skills.set_defaults(handler=_skills)
+    add_skill_commands(commands)
 
     watch = commands.add_parser("watch", help="show a running agent's behaviour tree live")
     watch.add_argument("--connect", default=DEFAULT_AGENT_ENDPOINT, metavar="ENDPOINT",
@@ -278,25 +277,6 @@ def shortcut_overrides(args: argparse.Namespace) -> list[str]:
     """The ``--set`` overrides that ``run``'s shortcut options (--method, --stop, --epsilon) stand for."""
     shortcuts = {"explore.method": args.method, "stop.rule": args.stop, "stop.epsilon": args.epsilon}
     return [f"{key}={value}" for key, value in shortcuts.items() if value is not None]
-
-
-def _skills(args: argparse.Namespace) -> int:
-    from skills.registry import installed_skills
-
-    entries = installed_skills()
-    rows = [{"name": e.name, "class": e.target, "package": e.distribution, "summary": e.summary()} for e in entries]
-    if args.json:
-        print(json.dumps(rows, indent=2))
-        return 0
-    if not rows:
-        print("no skills installed (entry-point group homebot.skills)")
-        return 0
-    width = max(len(row["name"]) for row in rows)
-    for row in rows:
-        print(f"{row['name']:<{width}}  {row['summary']}")
-        print(f"{'':<{width}}  {row['class']} ({row['package']})")
-    broken = sum(row["summary"].startswith("BROKEN") for row in rows)
-    return 1 if broken else 0
 
 
 def _watch(args: argparse.Namespace) -> int:

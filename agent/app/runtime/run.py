@@ -25,6 +25,7 @@ from agent.mapping.occupancy import ExplorationMap
 from agent.planning.semantic import method_flags, new_semantic_map
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
 from agent.app.runtime.plots import save_map_png
+from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
 from agent.app.runtime.record import SnapshotLog, write_json_atomic
 from agent.timing import StageTimer
 from worlds.bus.link import WorldLink
@@ -33,6 +34,7 @@ from agent.vlm.backends import make_vlm
 from agent.vlm.errors import VLMError
 from agent.vlm.protocol import VisionLanguageModel
 from behaviours.eqa_tree import EqaTreeParts, build_eqa_tree
+from skills.ports import PortedSkill
 from worlds.vocabulary import LETTERS
 
 log = logging.getLogger(__name__)
@@ -79,6 +81,7 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
     try:
         vlm = make_vlm(config.vlm)  # a bad model path or backend fails now, before any world starts
         stopping, result["stop"] = _stopping_rule(config)  # so does a calibration that does not fit
+        plugged = make_plugged_skills(config.tree, link)  # and a skill the settings put into the tree
         if request.connect is None:
             world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
             world.wait_ready(link, config.bus.world_start_timeout_s)
@@ -93,9 +96,9 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
         outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, stopping, link,
-                                                   session, keys, folder, timer, extra_sinks or [])
+                                                   session, keys, folder, timer, extra_sinks or [], plugged)
         evaluation = _episode_report(link, config.bus.query_timeout_s)
-    except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError) as error:
+    except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError, PlugError) as error:
         reason = f"the episode could not start: {error}"
         result.update({"status": "failed", "reason": reason, "correct": False})
         write_json_atomic(folder / "result.json", result)
@@ -119,7 +122,8 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
 def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any], config: Config,
               vlm: VisionLanguageModel, stopping: StoppingRule,
               link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
-              extra_sinks: list[SnapshotSink]) -> tuple[EpisodeOutcome, ExplorationMap, list]:
+              extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]]
+              ) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
     writer = py_trees.blackboard.Client(name="EpisodeSetup")
     start = tuple(float(v) for v in reset_meta["base_pose"])
@@ -148,7 +152,9 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     snapshot_log = SnapshotLog(folder / "snapshots.jsonl")
     sinks = [snapshot_log, lambda data: publisher.put(json.dumps(data, ensure_ascii=False)), *extra_sinks]
     events.put(json.dumps({"event": "started", "run": run_id, "question": scenario["question"]}))
-    runner = EpisodeRunner(build_eqa_tree(parts), run_id, sinks, config.episode.max_seconds,
+    root = build_eqa_tree(parts)
+    plug_into(root, plugged)
+    runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds,
                            config.episode.tick_period_s, timer)
     try:
         outcome = runner.run()

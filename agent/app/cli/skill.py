@@ -1,0 +1,158 @@
+"""``homebot skills`` (what is installed, with each skill's ports) and ``homebot skill run`` (one skill,
+made by its registered name, run against a simulated home)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+
+from skills.context import SkillContext
+from skills.ports import PortError, PortedSkill
+from skills.registry import SkillError, SkillRegistry
+
+
+def add_skill_commands(commands: argparse._SubParsersAction) -> None:
+    """Add ``skills`` and ``skill run`` to the command line.
+
+    Args:
+        commands: the subparsers of ``homebot``.
+    """
+    listing = commands.add_parser("skills", help="list the installed skills (the homebot.skills entry points)")
+    listing.add_argument("--json", action="store_true", help="print them as JSON")
+    listing.set_defaults(handler=list_skills)
+    skill = commands.add_parser("skill", help="run one installed skill against a simulated home")
+    actions = skill.add_subparsers(dest="skill_command", required=True)
+    run = actions.add_parser("run", help="make a skill by its registered name and tick it to its end")
+    run.add_argument("name", help="the skill's registered name (see `homebot skills`)")
+    run.add_argument("--port", action="append", default=[], metavar="KEY=VALUE",
+                     help="bind an input port, e.g. --port look_point=0.4,0,0.8 (repeatable)")
+    run.add_argument("--seed", type=int, default=0, help="the home's seed (default 0)")
+    run.add_argument("--tabletop", metavar="TASK", help="a tabletop scene of interactive exploration instead "
+                     "of a home, e.g. drawer-only")
+    run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
+    run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default)")
+    run.add_argument("--timeout", type=float, default=120.0, help="seconds the skill may run (default 120)")
+    run.add_argument("--json", action="store_true", help="print the outcome as JSON")
+    run.set_defaults(handler=run_skill_command)
+
+
+def _rows(registry: SkillRegistry) -> list[dict[str, Any]]:
+    rows = []
+    for entry in registry.entries():
+        problem = registry.problem(entry.name)
+        row: dict[str, Any] = {"name": entry.name, "class": entry.target, "package": entry.distribution}
+        if problem:
+            row.update(summary=f"BROKEN: {problem}", ports=[])
+        else:
+            skill = registry.load(entry.name)
+            doc = (skill.__doc__ or "").strip()
+            row.update(summary=doc.splitlines()[0] if doc else "", ports=[port.describe() for port in skill.ports])
+        rows.append(row)
+    return rows
+
+
+def list_skills(args: argparse.Namespace) -> int:
+    """``homebot skills``: 0, or 1 when a skill is broken or declared twice."""
+    rows = _rows(SkillRegistry())
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    elif not rows:
+        print("no skills installed (entry-point group homebot.skills)")
+    else:
+        width = max(len(row["name"]) for row in rows)
+        for row in rows:
+            print(f"{row['name']:<{width}}  {row['summary']}")
+            print(f"{'':<{width}}  {row['class']} ({row['package']})")
+            for port in row["ports"]:
+                print(f"{'':<{width}}    {port}")
+    return 1 if any(row["summary"].startswith("BROKEN") for row in rows) else 0
+
+
+def _bindings(pairs: list[str]) -> dict[str, str]:
+    bindings = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip():
+            raise PortError(f"--port {pair!r}: expected KEY=VALUE, e.g. --port look_point=0.4,0,0.8")
+        bindings[key.strip()] = value.strip()
+    return bindings
+
+
+def run_skill_command(args: argparse.Namespace) -> int:
+    """``homebot skill run``: 0 when the skill succeeds, 1 when it fails, 2 when it cannot be made."""
+    from agent.app.config import load_config
+    from agent.app.runtime.world_process import WorldProcess, WorldStartError
+    from worlds.bus.keys import Keys, check_namespace
+    from worlds.bus.link import WorldLink
+    from worlds.bus.rpc import QueryFailed
+    from worlds.bus.session import free_tcp_endpoint, open_session
+
+    registry = SkillRegistry()
+    try:
+        bindings = _bindings(args.port)
+        registry.load(args.name)
+    except (SkillError, PortError) as error:
+        print(f"homebot skill run: {error}", file=sys.stderr)
+        return 2
+    config = load_config(getattr(args, "config", None), getattr(args, "set", None))
+    namespace = check_namespace(args.namespace or ("homebot/default" if args.connect else
+                                                   f"homebot/skill-{time.strftime('%H%M%S')}"))
+    endpoint = args.connect or free_tcp_endpoint()
+    session = open_session(connect=[endpoint])
+    link = WorldLink(session, Keys(namespace), config.bus.query_timeout_s)
+    world = None
+    try:
+        skill = registry.create(args.name, SkillContext(link), bindings)
+        if args.connect is None:
+            folder = Path("runs") / f"skill-{args.name}-{time.strftime('%Y%m%d-%H%M%S')}"
+            folder.mkdir(parents=True, exist_ok=True)
+            world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
+            world.wait_ready(link, config.bus.world_start_timeout_s)
+        reset = {"seed": args.seed, **({"tabletop": args.tabletop} if args.tabletop else {})}
+        link.call("reset", reset, timeout_s=config.bus.world_start_timeout_s)
+        outcome = _tick_to_end(skill, args.timeout)
+    except (SkillError, PortError) as error:
+        print(f"homebot skill run: {error}", file=sys.stderr)
+        return 2
+    except (WorldStartError, QueryFailed) as error:
+        print(f"homebot skill run: the world could not be reached: {error}", file=sys.stderr)
+        return 1
+    finally:
+        link.close()
+        if world is not None:
+            world.stop()
+        session.close()
+    print(json.dumps(outcome, default=str) if args.json else
+          f"{args.name}: {outcome['status']}: {outcome['feedback']}")
+    return 0 if outcome["status"] == "SUCCESS" else 1
+
+
+def _tick_to_end(skill: PortedSkill, timeout_s: float, tick_s: float = 0.002) -> dict[str, Any]:
+    """Tick a one-skill tree until it ends; its status, feedback and outputs."""
+    tree = py_trees.trees.BehaviourTree(skill)
+    deadline = time.monotonic() + timeout_s
+    tree.tick()
+    while skill.status == Status.RUNNING and time.monotonic() < deadline:
+        time.sleep(tick_s)
+        tree.tick()
+    if skill.status == Status.RUNNING:
+        skill.stop(Status.INVALID)
+        return {"status": "FAILURE", "feedback": f"still running after {timeout_s:.0f} s", "outputs": {}}
+    outputs = {name: _plain(value) for name, value in skill.outputs.items()}
+    return {"status": skill.status.name, "feedback": skill.feedback_message, "outputs": outputs}
+
+
+def _plain(value: Any) -> Any:
+    """An output as JSON can hold it (a dataclass's fields, arrays as lists)."""
+    if hasattr(value, "__dataclass_fields__"):
+        return {name: _plain(getattr(value, name)) for name in value.__dataclass_fields__}
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    return value

@@ -1,0 +1,110 @@
+"""Reading the world's replies to arm commands: the arm's state, and whether a step went as planned.
+
+Pure functions of the reply, so the rules an `skills.base.ArmSkill` applies to every step (a move
+that stopped on a contact, fell short, lost what it held; a grasp that caught the wrong thing; a
+part that did not open far enough) test without a world.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from skills.arm.plan import Step
+
+#: A move that ends further than this (rad or m, any joint) from its last sample was held back.
+BLOCKED_RAD = 0.03
+#: The share of a planned opening or closing the part must make for the skill to count it done.
+MIN_PART_SHARE = 0.6
+#: What a grasp holds when it holds what the step expects, and what it says otherwise.
+_EXPECTED = {
+    "handle": (lambda label: label.get("category") == "handle", "not a handle"),
+    "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
+}
+
+
+def arm_state(meta: dict[str, Any]) -> dict[str, Any]:
+    """The fields of an arm reply, checked: joints, TCP pose, held, stowed, and a motion's errors and contacts."""
+    try:
+        q = np.asarray(meta["positions"], dtype=float)
+        tcp = np.asarray(meta["tcp_pose"], dtype=float)
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"arm reply: missing or malformed {error}") from None
+    if q.ndim != 1 or tcp.shape != (4, 4) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(tcp))):
+        raise ValueError("arm reply: positions must be a vector and tcp_pose a finite 4x4 matrix")
+    held = meta.get("held")
+    return {
+        "q": q,
+        "tcp_pose": tcp,
+        "held": held if isinstance(held, dict) else None,
+        "gripper_width": float(meta.get("gripper_width", 0.0)),
+        "stowed": bool(meta.get("stowed", False)),
+        "final_error": float(meta.get("final_error", 0.0)),
+        "stopped_on_contact": bool(meta.get("stopped_on_contact", False)),
+        "contacts": [c for c in meta.get("contacts", []) if isinstance(c, dict)],
+    }
+
+
+def thing_name(label: dict[str, Any]) -> str:
+    """How a reply's label reads in a message: "handle 12"."""
+    return f"{label.get('category', 'something')} {label.get('id', '')}".strip()
+
+
+def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | None) -> tuple[str, float | None]:
+    """Why the world's reply to ``step`` means the skill failed, and how far a part it moved stands.
+
+    Args:
+        step: the step the reply answers.
+        state: the reply, read by `arm_state`.
+        previous: the arm's state before the step (None for the first).
+
+    Returns:
+        The problem ("" when the step went as planned) and, for a step that moves a door or
+        drawer, the part's opening where the hand ended (m or rad; None for other steps).
+    """
+    held = state["held"]
+    if step.kind == "gripper":
+        return _gripper_problem(step, state), None
+    contacts = state["contacts"]
+    stopped = state["stopped_on_contact"] or state["final_error"] > BLOCKED_RAD
+    if step.touch and stopped and all(_EXPECTED[step.touch][0](c) for c in contacts):
+        return "", None  # a touch grasp's approach found what it reaches for (or a touch too light to report)
+    if state["stopped_on_contact"]:
+        touched = ", ".join(f"{thing_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
+        return f"stopped on contact with {touched}", None
+    if step.part_motion is not None:
+        motion = step.part_motion
+        achieved = motion.opening(state["tcp_pose"][:3, 3])
+        want = motion.end - motion.start
+        kind = motion.geometry.kind
+        if previous is not None and previous["held"] is not None and held is None:
+            return f"the gripper lost the {kind}'s handle", achieved
+        if (achieved - motion.start) / want < MIN_PART_SHARE:
+            verb = "open" if want > 0 else "close"
+            return (f"the {kind} did not {verb}: its handle went {abs(achieved - motion.start):.3f} "
+                    f"{motion.unit} of the {abs(want):.3f} {motion.unit} planned"), achieved
+        return "", achieved
+    if state["final_error"] > BLOCKED_RAD:
+        return (f"the arm stopped {state['final_error']:.3f} rad short of its target: something held it back "
+                f"(a touch too light for the world to report as a contact)"), None
+    if previous is not None and previous["held"] is not None and held is None:
+        return f"the gripper lost {thing_name(previous['held'])}", None
+    return "", None
+
+
+def _gripper_problem(step: Step, state: dict[str, Any]) -> str:
+    """Why a gripper step's reply is wrong: closing caught nothing, or the wrong thing, or
+    something it should not have; opening still holds."""
+    held = state["held"]
+    if step.action == "close" and step.expect_held is None:
+        return "" if held is None else f"the fingers caught {thing_name(held)} closing before the approach"
+    if step.action == "close":
+        if held is None:
+            return f"the gripper closed on nothing ({state['gripper_width'] * 1000:.0f} mm between the fingers)"
+        expected, otherwise = _EXPECTED[step.expect_held]
+        if not expected(held):
+            return f"the gripper holds {thing_name(held)}, {otherwise}"
+    elif held is not None:
+        return f"the gripper still holds {thing_name(held)} after opening"
+    return ""
