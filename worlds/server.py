@@ -37,11 +37,12 @@ from worlds.bus.session import EndpointError, open_session
 from worlds import commands
 from worlds.evaluation import EpisodeRecord
 from worlds.home import generate_home
+from worlds.manipulation import ArmState
 from worlds.robot import CameraConfig
 from worlds.robot_arm import arm_spec, robot_description
 from worlds.route import driven_route
 from worlds.scenario import make_scenario
-from worlds.sim import ArmState, World
+from worlds.sim import World
 from worlds.tabletop import tabletop_variant
 from worlds.tabletop_scene import TABLE_HEIGHT
 
