@@ -56,7 +56,7 @@ def views():
     access = storage.storage.slot(item.slot).access
     world.set_part_state(storage.instance_id, access, storage.storage.part(access).upper)
     opened = _observation(world.observe(), camera, stand)
-    door = world._built.storage[storage.instance_id].placement.part_ids()[access]
+    door = world.stage.built.storage[storage.instance_id].placement.part_ids()[access]
     world.close()
     return scenario, item, closed, opened, door
 

@@ -27,7 +27,9 @@ PURE = ("agent.mapping", "agent.planning", "agent.eqa", "agent.acsg", "agent.lfe
         "agent.observation", "agent.timing", "agent.pose", "skills.arm")
 #: What a pure library never imports: frameworks, the live wire, the simulator, and every layer above.
 KEPT_OUT_OF_PURE = ("py_trees", "zenoh", "pybullet", "worlds.bus.rpc", "worlds.bus.session", "worlds.bus.liveness",
-                    "worlds.bus.link", "worlds.sim", "worlds.server", "agent.app", "behaviours", "skills")
+                    "worlds.bus.link", "worlds.sim", "worlds.stage", "worlds.body", "worlds.contacts", "worlds.drive",
+                    "worlds.sight", "worlds.scene_state", "worlds.manipulation", "worlds.server", "agent.app", "behaviours",
+                    "skills")
 #: Upward imports left to undo: module -> the imports it still makes.
 STILL_UPWARD: dict[str, set[str]] = {
     "agent.lfe.data": {"agent.app.runtime.pool"},

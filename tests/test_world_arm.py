@@ -226,7 +226,7 @@ def test_a_trajectory_reaches_its_target(drawer_world: tuple[World, TabletopScen
 
 def test_pulling_a_grasped_drawer_handle_opens_the_drawer(drawer_world: tuple[World, TabletopScene, int]) -> None:
     world, scene, piece_id = drawer_world
-    piece = world._built.storage[piece_id]
+    piece = world.stage.built.storage[piece_id]
     handle = np.array(p.getLinkState(piece.body, piece.links["drawer_1_handle"], physicsClientId=world.client)[4])
     cup = next(obj.instance_id for obj in scene.objects if obj.slot == "drawer_1/0")
     cup_before = np.array(world.object_position(cup))

@@ -8,8 +8,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from worlds.drive import MAX_STEP
 from worlds.robot import ROBOT_RADIUS, CameraConfig
-from worlds.sim import MAX_STEP, World
+from worlds.sight import visible_facts
+from worlds.sim import World
 from worlds.storage import home_part_labels, home_storage
 from worlds.things import point_rect_distance
 
@@ -162,7 +164,7 @@ def test_inside_is_said_only_where_the_frame_shows_the_open_storage_around_the_t
     opened = sim.part_states()
 
     def inside(joints: dict, in_frame: set[int]) -> str | None:
-        return sim._visible_facts(label, joints, in_frame).get("inside")
+        return visible_facts(sim.stage, label, joints, in_frame).get("inside")
 
     assert inside(opened, {item_id, piece_id}) == piece.category
     assert inside(opened, {item_id, drawer_id}) == piece.category  # looking down into the drawer

@@ -37,11 +37,12 @@ from worlds.bus.session import EndpointError, open_session
 from worlds import commands
 from worlds.evaluation import EpisodeRecord
 from worlds.home import generate_home
+from worlds.manipulation import ArmState
 from worlds.robot import CameraConfig
 from worlds.robot_arm import arm_spec, robot_description
 from worlds.route import driven_route
 from worlds.scenario import make_scenario
-from worlds.sim import ArmState, World
+from worlds.sim import World
 from worlds.tabletop import tabletop_variant
 from worlds.tabletop_scene import TABLE_HEIGHT
 
@@ -53,7 +54,13 @@ DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 
 
 class WorldServer:
-    """Serves one `World` under a namespace. ``ready`` is set once every queryable is declared."""
+    """Serves one `World` under a namespace. ``ready`` is set once every queryable is declared.
+
+    Args:
+        session: the open Zenoh session to serve on.
+        namespace: the key prefix of this run (`worlds.bus.keys.Keys`).
+        camera: the head camera; `CameraConfig`'s defaults when None.
+    """
 
     def __init__(self, session: zenoh.Session, namespace: str, camera: CameraConfig | None = None) -> None:
         self.session = session
@@ -64,7 +71,12 @@ class WorldServer:
         self._record: EpisodeRecord | None = None  # the evaluator's, for the home episode under way
 
     def serve(self, stop: threading.Event, seed: int | None = None) -> None:
-        """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set."""
+        """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set.
+
+        Args:
+            stop: set to stop serving.
+            seed: the home to reset to before the first command, if any.
+        """
         self._world = World(self.camera)
         server = CommandServer(self.session)
         token = None
@@ -93,7 +105,11 @@ class WorldServer:
 
     @property
     def world(self) -> World | None:
-        """The world being served (None before `serve` builds it and after it stops)."""
+        """The world being served, for a caller in the serving thread between commands.
+
+        Returns:
+            The `World`; None before `serve` builds it and after it stops.
+        """
         return self._world
 
     def _built(self, verb: str) -> World:
@@ -228,7 +244,19 @@ def run_world(
     seed: int | None,
     stop: threading.Event,
 ) -> None:
-    """Open a session on the given endpoints and serve a world until ``stop`` is set."""
+    """Open a session on the given endpoints and serve a world until ``stop`` is set.
+
+    Args:
+        namespace: the key prefix of this run.
+        listen: endpoints to listen on.
+        connect: endpoints to connect to.
+        camera: the head camera.
+        seed: the home to reset to at start, if any.
+        stop: set to stop serving.
+
+    Raises:
+        EndpointError: when an endpoint cannot be opened.
+    """
     session = open_session(listen, connect)
     try:
         WorldServer(session, namespace, camera).serve(stop, seed)
@@ -252,7 +280,14 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command-line entry: serve until SIGTERM or SIGINT. Returns the process exit status."""
+    """Command-line entry: serve until SIGTERM or SIGINT.
+
+    Args:
+        argv: the arguments, else the process's.
+
+    Returns:
+        The process exit status: 0, or 2 when an endpoint cannot be opened.
+    """
     parser = _parser()
     args = parser.parse_args(argv)
     try:
