@@ -29,9 +29,7 @@ PURE = ("agent.mapping", "agent.planning", "agent.eqa", "agent.acsg", "agent.lfe
 KEPT_OUT_OF_PURE = ("py_trees", "zenoh", "pybullet", "worlds.bus.rpc", "worlds.bus.session", "worlds.bus.liveness",
                     "worlds.bus.link", "worlds.sim", "worlds.server", "agent.app", "behaviours", "skills")
 #: Upward imports left to undo: module -> the imports it still makes.
-STILL_UPWARD: dict[str, set[str]] = {
-    "agent.lfe.data": {"agent.app.runtime.pool"},
-}
+STILL_UPWARD: dict[str, set[str]] = {}
 
 
 def _imports() -> dict[str, set[str]]:
