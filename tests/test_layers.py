@@ -31,9 +31,7 @@ KEPT_OUT_OF_PURE = ("py_trees", "zenoh", "pybullet", "worlds.bus.rpc", "worlds.b
                     "worlds.sight", "worlds.scene_state", "worlds.manipulation", "worlds.server", "agent.app", "behaviours",
                     "skills")
 #: Upward imports left to undo: module -> the imports it still makes.
-STILL_UPWARD: dict[str, set[str]] = {
-    "agent.lfe.data": {"agent.app.runtime.pool"},
-}
+STILL_UPWARD: dict[str, set[str]] = {}
 
 
 def _imports() -> dict[str, set[str]]:

@@ -8,19 +8,12 @@ import numpy as np
 import pytest
 
 from agent.lfe.bellman import distance_matrix
-from agent.lfe.coverage import (
-    Action,
-    CoverageConfig,
-    Pose,
-    Situation,
-    TrueHome,
-    fbe_near,
-    run_coverage,
-    stopping_cell,
-    take_action,
-)
+from agent.lfe.coverage import fbe_near, run_coverage
+from agent.lfe.motion import Action, stopping_cell, take_action
 from agent.lfe.sensor import PanoramicSensor
+from agent.lfe.task import CoverageConfig, Situation, TrueHome
 from agent.mapping.grid import GridSpec
+from agent.pose import Pose2D
 from worlds.home import generate_home
 
 RES = 0.05
@@ -118,7 +111,7 @@ def test_a_generated_home_has_its_start_where_the_robot_fits_and_the_same_seed_g
 def test_turns_change_only_the_heading_and_forward_moves_a_quarter_metre() -> None:
     home = two_rooms()
     clearance = home.clearance_m()
-    pose = Pose(1.0, 1.5, 0.0)
+    pose = Pose2D(1.0, 1.5, 0.0)
     left, blocked = take_action(pose, Action.TURN_LEFT, clearance, home.spec)
     assert not blocked and (left.x, left.y) == (1.0, 1.5) and left.yaw == pytest.approx(math.radians(30))
     right, _ = take_action(pose, Action.TURN_RIGHT, clearance, home.spec)
@@ -131,7 +124,7 @@ def test_turns_change_only_the_heading_and_forward_moves_a_quarter_metre() -> No
 def test_a_forward_move_into_a_wall_is_refused_and_the_pose_kept() -> None:
     home = two_rooms()
     clearance = home.clearance_m()
-    facing_wall = Pose(2.56, 0.5, 0.0)  # 0.34 m from the dividing wall's face at x = 2.9, heading at it
+    facing_wall = Pose2D(2.56, 0.5, 0.0)  # 0.34 m from the dividing wall's face at x = 2.9, heading at it
     assert stopping_cell(facing_wall, clearance, home.spec) is not None
     after, blocked = take_action(facing_wall, Action.FORWARD, clearance, home.spec)
     assert blocked and after == facing_wall

@@ -7,15 +7,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agent.lfe.coverage import CoverageConfig, Situation, TrueHome, fbe_near, run_coverage
-from agent.lfe.data import (
-    DataConfig,
-    generate_dataset,
-    home_samples,
-)
+from agent.app.eval.lfe_data import generate_dataset
+from agent.lfe.coverage import fbe_near, run_coverage
+from agent.lfe.samples import DataConfig, home_samples
 from agent.lfe.shards import load_shard, shard_path
 from agent.lfe.properties import label_frontiers
 from agent.lfe.raster import FREE, UNKNOWN, coarse_cells, encode_map, frontier_pixel_mask
+from agent.lfe.task import CoverageConfig, Situation, TrueHome
 from worlds.home import generate_home
 
 SMALL_HOME = 27  # a 76 m² home of four rooms

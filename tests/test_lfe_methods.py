@@ -12,10 +12,11 @@ import torch
 from agent.app.eval.coverage import SIZES, evaluate_coverage, format_table, jobs, model_digest, plot_curves
 from agent.lfe.bellman import choose_frontier, plan
 from agent.app.bench.lfe import branches
-from agent.lfe.coverage import CoverageConfig, TrueHome, fbe_near, run_coverage
+from agent.lfe.coverage import fbe_near, run_coverage
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.methods import Method, make_chooser
 from agent.lfe.model import FrontierUNet, UNetConfig, save_model
+from agent.lfe.task import CoverageConfig, TrueHome
 from agent.mapping.grid import GridSpec
 from worlds.home import generate_home
 

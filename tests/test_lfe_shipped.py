@@ -12,9 +12,10 @@ from scipy.stats import spearmanr
 from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.app.eval.coverage import SEED_BASE
-from agent.lfe.coverage import CoverageConfig, Situation, TrueHome, fbe_near, run_coverage
+from agent.lfe.coverage import fbe_near, run_coverage
 from agent.lfe.estimator import SHIPPED_MODEL, LearnedEstimator
 from agent.lfe.properties import label_frontiers
+from agent.lfe.task import CoverageConfig, Situation, TrueHome
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import Observation

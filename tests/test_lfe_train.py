@@ -15,15 +15,9 @@ from scipy import ndimage
 from agent.lfe.model import UNetConfig, load_model
 from agent.lfe.properties import label_frontiers
 from agent.lfe.raster import FREE, encode_map
-from agent.lfe.train import (
-    CropSampler,
-    TrainConfig,
-    load_shard,
-    read_history,
-    split_homes,
-    train,
-)
 from agent.lfe.shards import shard_paths
+from agent.lfe.train import TrainConfig, read_history, train
+from agent.lfe.training_set import CropSampler, load_shard, split_homes
 from agent.mapping.grid import GridSpec
 from agent.planning.frontier import cluster_frontiers, frontier_cells
 
@@ -76,7 +70,7 @@ def explore(free: np.ndarray, rng: np.random.Generator, snapshots: int = 4, radi
 
 
 def write_shard(directory: Path, seed: int) -> Path:
-    """One synthetic home's shard in `agent.lfe.data`'s format."""
+    """One synthetic home's shard in `agent.lfe.samples`'s format."""
     rng = np.random.default_rng(seed)
     path = directory / f"home-{seed:05d}.npz"
     np.savez_compressed(path, **explore(rooms(rng), rng), resolution=np.float64(RES), seed=np.int64(seed))

@@ -18,15 +18,18 @@ from contextlib import nullcontext
 from enum import StrEnum
 
 from agent.lfe.bellman import choose_frontier, greedy
-from agent.lfe.coverage import CoverageConfig, FrontierChooser, Situation, TrueHome, fbe_near
+from agent.lfe.coverage import fbe_near
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.properties import FrontierProperties, label_frontiers
+from agent.lfe.task import CoverageConfig, FrontierChooser, Situation, TrueHome
 from agent.timing import StageTimer
 
 PropertySource = Callable[[Situation], list[FrontierProperties]]
 
 
 class Method(StrEnum):
+    """The methods of the paper's Table I, by the names the command line and the result rows use."""
+
     LFE = "lfe"
     LFE_ORACLE = "lfe-oracle"
     GREEDY = "greedy"
@@ -34,7 +37,14 @@ class Method(StrEnum):
 
 
 def learned(estimator: LearnedEstimator) -> PropertySource:
-    """R_A, D_in and D_out as the network predicts them from the partial map."""
+    """R_A, D_in and D_out as the network predicts them from the partial map.
+
+    Args:
+        estimator: the trained network.
+
+    Returns:
+        The property source of the learned methods.
+    """
 
     def source(situation: Situation) -> list[FrontierProperties]:
         return estimator.estimate(situation.free, situation.occupied, situation.spec.resolution, situation.frontiers)
@@ -43,7 +53,14 @@ def learned(estimator: LearnedEstimator) -> PropertySource:
 
 
 def oracle(home: TrueHome) -> PropertySource:
-    """The true R_A, D_in and D_out, from the home's ground truth and what has been observed."""
+    """The true R_A, D_in and D_out, from the home's ground truth and what has been observed.
+
+    Args:
+        home: the ground truth the oracle reads.
+
+    Returns:
+        The property source of ``lfe-oracle``.
+    """
 
     def source(situation: Situation) -> list[FrontierProperties]:
         return label_frontiers(home.free, situation.observed, situation.frontiers, situation.spec.resolution)
@@ -54,7 +71,13 @@ def oracle(home: TrueHome) -> PropertySource:
 def bellman_chooser(source: PropertySource, step_length_m: float, timer: StageTimer | None = None) -> FrontierChooser:
     """The frontier whose best sequence of visits reveals the most area in the steps left (Eq. 4).
 
-    ``timer`` times each planning step's parts: "properties", "distances" and "recursion".
+    Args:
+        source: gives each offered frontier its R_A, D_in and D_out.
+        step_length_m: the length of a forward move, to count path lengths in steps.
+        timer: times each planning step's parts: "properties", "distances" and "recursion".
+
+    Returns:
+        The chooser.
     """
 
     def choose(situation: Situation) -> int:
@@ -69,7 +92,14 @@ def bellman_chooser(source: PropertySource, step_length_m: float, timer: StageTi
 
 
 def greedy_chooser(source: PropertySource) -> FrontierChooser:
-    """The frontier with the largest R_A, however far it is."""
+    """The frontier with the largest R_A, however far it is.
+
+    Args:
+        source: gives each offered frontier its R_A.
+
+    Returns:
+        The chooser.
+    """
 
     def choose(situation: Situation) -> int:
         return greedy([p.area_m2 for p in source(situation)])
@@ -79,7 +109,20 @@ def greedy_chooser(source: PropertySource) -> FrontierChooser:
 
 def make_chooser(method: Method | str, home: TrueHome, estimator: LearnedEstimator | None,
                  config: CoverageConfig = CoverageConfig()) -> FrontierChooser:
-    """The chooser of ``method`` for one episode in ``home``; the learned ones need ``estimator``."""
+    """The chooser of ``method`` for one episode in ``home``.
+
+    Args:
+        method: which method.
+        home: the episode's ground truth (read by the oracle only).
+        estimator: the network; the learned methods need it.
+        config: the move's length.
+
+    Returns:
+        The chooser.
+
+    Raises:
+        ValueError: an unknown method, or a learned one without ``estimator``.
+    """
     method = Method(method)
     if method is Method.FBE_NEAR:
         return fbe_near

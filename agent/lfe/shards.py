@@ -1,6 +1,6 @@
 """The training data's files: one compressed archive per home, its arrays checked on the way in.
 
-A shard (``home-SSSSS.npz``) holds one home's snapshots (`agent.lfe.data` writes them, the trainer
+A shard (``home-SSSSS.npz``) holds one home's snapshots (`agent.lfe.samples` makes them, the trainer
 reads them):
 
 - ``maps``: uint8 (S, H, W), each snapshot's map encoded by `agent.lfe.raster.encode_map`;

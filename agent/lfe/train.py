@@ -1,20 +1,18 @@
 """Training the frontier-property UNet on shards of explored homes.
 
-The data are one ``home-NNNNN.npz`` per home (written by `agent.lfe.data`): the encoded maps of
+The data are one ``home-NNNNN.npz`` per home (`agent.lfe.shards`, made by `agent.lfe.samples`): the encoded maps of
 the snapshots taken while a robot explored it, and the frontier pixels of each snapshot with
 their ground-truth R_A, D_in and D_out. Training follows the paper (§VI): Adam at 1e-3, divided
 by ten every two epochs, six epochs, an L1 loss on the frontier pixels only.
 
 What differs is the budget: a few thousand snapshots and half an hour on a laptop CPU instead of
-220,000 tuples and twelve GPU hours. So each step sees a batch of crops of the map (``crop``
-pixels a side, 12.8 m at 0.1 m cells) centred near a random frontier pixel, turned and mirrored
-at random (the properties do not change when the house does), and an epoch is a fixed number of
-steps rather than a pass over the data.
+220,000 tuples and twelve GPU hours. So each step sees a batch of crops of the map around
+frontier pixels, turned and mirrored at random (`agent.lfe.training_set`), and an epoch is a
+fixed number of steps rather than a pass over the data.
 
-Homes, not snapshots, are held out for validation: snapshots of one home share its layout, and a
-network validated on the home it trained on would look better than it is. Validation runs on a
-fixed set of crops of the held-out homes, next to a baseline that predicts the training median
-everywhere, so the history shows whether the network learned anything beyond the typical value.
+Homes, not snapshots, are held out for validation (`agent.lfe.training_set.split_homes`).
+Validation runs on a fixed set of crops of the held-out homes, next to a baseline that predicts
+the training median everywhere (`agent.lfe.validation`).
 
 A run writes into ``out_dir``: ``model.pt`` (the best epoch by validation loss), ``history.jsonl``
 (one line per finished epoch), ``loss.png`` and ``checkpoint.pt``. Running the same command again
@@ -27,7 +25,6 @@ from __future__ import annotations
 import json
 import math
 import time
-import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -39,19 +36,9 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from agent.lfe import shards
-from agent.lfe.model import (
-    TARGETS,
-    FrontierUNet,
-    ModelFileError,
-    UNetConfig,
-    atomic_save,
-    encode_input,
-    from_network,
-    load_plain,
-    map_window,
-    save_model,
-    to_network,
-)
+from agent.lfe.model import FrontierUNet, ModelFileError, UNetConfig, atomic_save, load_plain, save_model
+from agent.lfe.training_set import CropSampler, Shard, load_shard, split_homes
+from agent.lfe.validation import Validation, masked_l1
 
 CHECKPOINT_FORMAT = "homebot-lfe-checkpoint/1"
 
@@ -68,6 +55,26 @@ class TrainConfig:
     after it. ``device`` "auto" takes CUDA when there is one. ``threads`` 0 leaves torch's own
     choice (every core); on a machine shared with other work, 1 can be faster, because torch's
     threads spin waiting for each other when a core is taken away.
+
+    Args:
+        model: the network's shape.
+        epochs: epochs in all, those of earlier invocations included.
+        lr: Adam's learning rate in the first epochs.
+        lr_decay: the factor the learning rate is multiplied by every ``lr_decay_every`` epochs.
+        lr_decay_every: epochs between decays.
+        batch_size: crops per optimiser step.
+        crop: the side of a crop in pixels, a multiple of ``model.multiple``.
+        steps_per_epoch: optimiser steps per epoch.
+        val_fraction: the share of homes held out for validation.
+        val_crops: crops of the held-out homes scored after each epoch.
+        seed: the split, the initialisation and the crops.
+        max_minutes: the time limit of one invocation; None for none.
+        device: "auto", or a torch device such as "cpu" or "cuda".
+        threads: torch's CPU threads; 0 leaves torch's own choice.
+
+    Raises:
+        ValueError: a field out of its range, a crop the UNet's poolings do not divide, or an
+            unknown device.
     """
 
     model: UNetConfig = field(default_factory=UNetConfig)
@@ -107,16 +114,31 @@ class TrainConfig:
             raise ValueError(f"device: {self.device!r} is not 'auto' or a torch device such as 'cpu' or 'cuda'") from None
 
     def lr_at(self, epoch: int) -> float:
-        """The learning rate of a 1-based epoch: ``lr``, times ``lr_decay`` after every ``lr_decay_every`` epochs."""
+        """The learning rate of an epoch, as the paper's schedule has it.
+
+        Args:
+            epoch: the epoch, from 1.
+
+        Returns:
+            ``lr``, times ``lr_decay`` after every ``lr_decay_every`` epochs.
+        """
         return self.lr * self.lr_decay ** ((epoch - 1) // self.lr_decay_every)
 
     def to_dict(self) -> dict[str, Any]:
+        """The configuration as plain data, for the model file's metadata.
+
+        Returns:
+            Every field, the model's shape as a nested dict.
+        """
         return asdict(self)
 
     def outcome_fields(self) -> dict[str, Any]:
         """The fields that decide the weights of each epoch: a resumed run must agree on all of them.
 
         ``epochs`` is not one of them, so a finished run can be extended by asking for more.
+
+        Returns:
+            `to_dict` less ``epochs``, ``max_minutes``, ``device`` and ``threads``.
         """
         values = self.to_dict()
         for name in ("epochs", "max_minutes", "device", "threads"):
@@ -135,165 +157,43 @@ def _require_number(value: Any, name: str, low: float, high: float = math.inf, h
 
 @dataclass(frozen=True)
 class TrainResult:
-    """What a call to `train` left behind and how good it is."""
+    """What a call to `train` left behind and how good it is.
+
+    Args:
+        model_path: the best epoch's weights.
+        history: every finished epoch, resumed ones included.
+        best_epoch: the epoch with the lowest validation loss.
+        baseline: the training median's validation loss and MAE per channel.
+        resumed_after: epochs finished before this call (0: a fresh start).
+        stopped_early: the time limit cut this call short; run again to continue.
+    """
 
     model_path: Path
-    history: list[dict[str, Any]]  # every finished epoch, resumed ones included
+    history: list[dict[str, Any]]
     best_epoch: int
-    baseline: dict[str, Any]  # the training median's validation loss and MAE per channel
-    resumed_after: int  # epochs finished before this call (0: a fresh start)
-    stopped_early: bool  # the time limit cut this call short; run again to continue
+    baseline: dict[str, Any]
+    resumed_after: int
+    stopped_early: bool
 
 
-# --- data ------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Shard:
-    """One home's snapshots, with the frontier pixels of snapshot ``s`` at rows ``starts[s]:starts[s+1]``."""
-
-    name: str
-    maps: np.ndarray  # uint8 (S, H, W)
-    pixels: np.ndarray  # int (P, 2) row, col, grouped by snapshot
-    targets: np.ndarray  # float32 (P, 3) natural units
-    starts: np.ndarray  # (S + 1,) offsets into pixels per snapshot
-
-    def frontier_pixels(self, snapshot: int) -> tuple[np.ndarray, np.ndarray]:
-        """(pixels (K, 2), targets (K, 3)) of one snapshot."""
-        rows = slice(self.starts[snapshot], self.starts[snapshot + 1])
-        return self.pixels[rows], self.targets[rows]
-
-
-def load_shard(path: Path, model_resolution: float) -> Shard:
-    """Read and check one home's shard (`agent.lfe.shards.load_shard`) at the network's resolution."""
-    arrays = shards.load_shard(path)
-    resolution = float(arrays["resolution"])
-    if not math.isclose(resolution, model_resolution):
-        raise ValueError(f"{path}: maps are at {resolution:g} m, the network reads {model_resolution:g} m")
-    pixels = arrays["pixels"]
-    starts = np.searchsorted(pixels[:, 0], np.arange(len(arrays["maps"]) + 1))
-    return Shard(Path(path).stem, arrays["maps"], pixels[:, 1:].astype(np.int64), arrays["targets"], starts)
-
-
-def split_homes(paths: Sequence[Path], val_fraction: float, seed: int) -> tuple[list[Path], list[Path]]:
-    """(training, validation) shards: whole homes, at least one on each side.
-
-    Each home draws a number from a generator seeded by (seed, its name) and the lowest go to
-    validation, so the split depends on the seed and the names only, and adding homes moves few
-    of the old ones across.
-    """
-    if len(paths) < 2:
-        raise ValueError(f"need at least two homes to hold one out for validation, got {len(paths)}")
-    draws = [np.random.default_rng([seed, zlib.crc32(Path(p).stem.encode())]).random() for p in paths]
-    count = min(max(round(val_fraction * len(paths)), 1), len(paths) - 1)
-    held_out = set(np.argsort(draws, kind="stable")[:count].tolist())
-    return ([p for i, p in enumerate(paths) if i not in held_out],
-            [p for i, p in enumerate(paths) if i in held_out])
-
-
-@dataclass(frozen=True)
-class Batch:
-    """Network inputs (B, 4, C, C), targets in network units (B, 3, C, C) and the frontier mask (B, C, C)."""
-
-    inputs: torch.Tensor
-    targets: torch.Tensor
-    mask: torch.Tensor
-
-    def to(self, device: torch.device) -> Batch:
-        return Batch(self.inputs.to(device), self.targets.to(device), self.mask.to(device))
-
-
-class CropSampler:
-    """Crops of snapshots centred near a frontier pixel, padded with unknown beyond the map.
-
-    Snapshots are drawn uniformly (each with at least one frontier pixel), then one of their
-    frontier pixels, then an offset of up to a quarter crop so the frontier is not always centred.
-    """
-
-    def __init__(self, shards: Sequence[Shard], crop: int) -> None:
-        self.shards = list(shards)
-        self.crop = crop
-        self.snapshots = [(h, s) for h, shard in enumerate(self.shards)
-                          for s in range(len(shard.maps)) if shard.starts[s + 1] > shard.starts[s]]
-        if not self.snapshots:
-            raise ValueError(f"no frontier pixels in homes {', '.join(s.name for s in self.shards)}")
-
-    def batch(self, rng: np.random.Generator, size: int, augment: bool) -> Batch:
-        maps, masks, targets = zip(*(self._sample(rng, augment) for _ in range(size)))
-        mask = torch.from_numpy(np.stack(masks))
-        return Batch(encode_input(np.stack(maps), mask), to_network(np.stack(targets)), mask)
-
-    def _sample(self, rng: np.random.Generator, augment: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        home, snapshot = self.snapshots[rng.integers(len(self.snapshots))]
-        shard = self.shards[home]
-        pixels, values = shard.frontier_pixels(snapshot)
-        centre = pixels[rng.integers(len(pixels))] + rng.integers(-(self.crop // 4), self.crop // 4 + 1, size=2)
-        corner = centre - self.crop // 2
-        map_crop = map_window(shard.maps[snapshot], corner, (self.crop, self.crop))
-        inside = ((pixels >= corner) & (pixels < corner + self.crop)).all(axis=1)
-        rows, cols = (pixels[inside] - corner).T
-        mask = np.zeros((self.crop, self.crop), dtype=bool)
-        mask[rows, cols] = True
-        target = np.zeros((len(TARGETS), self.crop, self.crop), dtype=np.float32)
-        target[:, rows, cols] = values[inside].T
-        if augment:
-            turns, mirror = int(rng.integers(4)), bool(rng.integers(2))
-            map_crop, mask, target = (_turn(a, turns, mirror) for a in (map_crop, mask, target))
-        return map_crop, mask, target
-
-
-def _turn(array: np.ndarray, turns: int, mirror: bool) -> np.ndarray:
-    """Rotate the last two axes by quarter turns, then mirror left-right if asked (contiguous copy)."""
-    array = np.rot90(array, turns, axes=(-2, -1))
-    return np.ascontiguousarray(array[..., ::-1] if mirror else array)
-
-
-# --- training --------------------------------------------------------------------------------
-
-
-def masked_l1(outputs: torch.Tensor, targets: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    """Mean absolute error over frontier pixels and the three channels (network units)."""
-    return (outputs - targets).abs().mean(dim=1)[mask].mean()
-
-
-@dataclass(frozen=True)
-class _Validation:
-    """The fixed validation crops, evaluated in mini-batches, and the baseline they are compared with."""
-
-    batches: list[Batch]
-    median: torch.Tensor  # (3,) training median, natural units
-
-    def evaluate(self, model: FrontierUNet, device: torch.device) -> dict[str, Any]:
-        """Validation L1 (network units) and MAE per channel (natural units) of the model."""
-        model.eval()
-        with torch.inference_mode():
-            outputs = [model(batch.inputs.to(device)).cpu() for batch in self.batches]
-        return self._score(outputs)
-
-    def baseline(self) -> dict[str, Any]:
-        """The same scores for predicting the training median at every pixel."""
-        constant = to_network(self.median)[None, :, None, None]
-        return self._score([constant.expand_as(batch.targets) for batch in self.batches])
-
-    def _score(self, outputs: list[torch.Tensor]) -> dict[str, Any]:
-        picked = [(out.permute(0, 2, 3, 1)[b.mask], b.targets.permute(0, 2, 3, 1)[b.mask])
-                  for out, b in zip(outputs, self.batches)]
-        predicted, wanted = (torch.cat(part) for part in zip(*picked))
-        mae = (from_network(predicted) - torch.expm1(wanted)).abs().mean(dim=0)
-        return {"val_loss": float((predicted - wanted).abs().mean()),
-                "val_mae": {name: float(v) for name, v in zip(TARGETS, mae)}}
-
-
-def _validation(shards: Sequence[Shard], train_shards: Sequence[Shard], config: TrainConfig) -> _Validation:
+def _validation(shards: Sequence[Shard], train_shards: Sequence[Shard], config: TrainConfig) -> Validation:
+    """The run's fixed validation crops of the held-out homes, and the training median for the baseline."""
     sampler = CropSampler(shards, config.crop)
     rng = np.random.default_rng([config.seed, 1 << 20])  # apart from every epoch's (seed, epoch)
     sizes = [min(config.batch_size, config.val_crops - start) for start in range(0, config.val_crops, config.batch_size)]
     median = np.median(np.concatenate([s.targets for s in train_shards]), axis=0)
-    return _Validation([sampler.batch(rng, size, augment=False) for size in sizes], torch.as_tensor(median))
+    return Validation([sampler.batch(rng, size, augment=False) for size in sizes], torch.as_tensor(median))
 
 
 def resolve_device(name: str) -> torch.device:
-    """'auto' -> CUDA when available, else the CPU; anything else as torch reads it."""
+    """The torch device a configuration names.
+
+    Args:
+        name: "auto", or a torch device such as "cpu" or "cuda".
+
+    Returns:
+        For "auto" CUDA when available, else the CPU; anything else as torch reads it.
+    """
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     return torch.device(name)
@@ -302,10 +202,22 @@ def resolve_device(name: str) -> torch.device:
 def train(data_dir: Path, out_dir: Path, config: TrainConfig, progress: Progress | None = None) -> TrainResult:
     """Train (or go on training) the UNet on the shards in ``data_dir``; results in ``out_dir``.
 
-    ``progress`` receives dicts with an ``event`` key: "start" (or "resume", with the epochs
-    already done), "step" (epoch, step, steps, loss), "epoch" (the history line), "time-limit",
-    and "done". Raises ValueError when ``out_dir`` holds a checkpoint of a different configuration
-    or split, rather than silently mixing two runs.
+    Args:
+        data_dir: the shards (`agent.lfe.shards`).
+        out_dir: ``model.pt``, ``history.jsonl``, ``loss.png`` and ``checkpoint.pt`` go here.
+        config: how to train.
+        progress: receives dicts with an ``event`` key: "start" (or "resume", with the epochs
+            already done), "step" (epoch, step, steps, loss), "epoch" (the history line),
+            "time-limit", and "done".
+
+    Returns:
+        The model's path, the history and the best epoch.
+
+    Raises:
+        ValueError: ``out_dir`` holds a checkpoint of a different configuration or split (rather
+            than silently mixing two runs), or fewer than two homes.
+        ModelFileError: ``out_dir`` holds a checkpoint file of another kind.
+        FileNotFoundError: ``data_dir`` holds no shards.
     """
     report = progress if progress is not None else (lambda event: None)
     out_dir = Path(out_dir)
@@ -365,7 +277,7 @@ class _Run:
         self.report({"event": "done", "best_epoch": best, "stopped_early": stopped_early, "baseline": baseline})
         return result
 
-    def _epoch(self, epoch: int, sampler: CropSampler, validation: _Validation, deadline: float) -> dict[str, Any]:
+    def _epoch(self, epoch: int, sampler: CropSampler, validation: Validation, deadline: float) -> dict[str, Any]:
         """Train one epoch (fewer steps if the deadline comes first) and validate it: its history line."""
         started = time.monotonic()
         lr = self.config.lr_at(epoch)
@@ -434,12 +346,24 @@ class _Run:
 
 
 def read_history(path: Path) -> list[dict[str, Any]]:
-    """The epochs of a ``history.jsonl``, in order."""
+    """Read a run's history file.
+
+    Args:
+        path: a ``history.jsonl``.
+
+    Returns:
+        The epochs' lines, in order.
+    """
     return [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
 
 
 def plot_history(history: Sequence[dict[str, Any]], path: Path) -> None:
-    """Training and validation loss per epoch, with the median baseline as a dashed line."""
+    """Draw the training and validation loss per epoch, with the median baseline as a dashed line.
+
+    Args:
+        history: the epochs' lines (`read_history`).
+        path: the image file to write.
+    """
     epochs = [line["epoch"] for line in history]
     figure = Figure(figsize=(6, 4))  # no pyplot: no global backend, nothing left open
     axes = figure.subplots()

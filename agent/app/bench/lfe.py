@@ -21,10 +21,11 @@ from typing import Any
 import numpy as np
 
 from agent.lfe.bellman import PLANNED_FRONTIERS
-from agent.lfe.coverage import CoverageConfig, Situation, TrueHome, run_coverage
+from agent.lfe.coverage import run_coverage
 from agent.lfe.estimator import LearnedEstimator
 from agent.lfe.methods import bellman_chooser, learned
 from agent.lfe.properties import label_frontiers
+from agent.lfe.task import CoverageConfig, Situation, TrueHome
 from agent.timing import StageTimer
 
 #: Frontier counts are reported in these bins (upper bounds, inclusive).

@@ -1,7 +1,7 @@
 """The `homebot lfe` commands: make training data for the frontier-property network and train it.
 
 - ``lfe data --homes N`` explores N seeded homes with plain frontier exploration and writes one
-  shard of labelled partial maps per home (`agent.lfe.data`); a rerun skips the homes done.
+  shard of labelled partial maps per home (`agent.app.eval.lfe_data`); a rerun skips the homes done.
 - ``lfe train`` fits the UNet on those shards with a held-out split by home (`agent.lfe.train`),
   writing the model, its per-epoch history and the loss curves; a rerun resumes after the last
   finished epoch.
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _data(args: argparse.Namespace) -> int:
-    from agent.lfe.data import generate_dataset
+    from agent.app.eval.lfe_data import generate_dataset
 
     if args.homes < 1:
         raise ValueError(f"--homes: {args.homes} must be at least 1")

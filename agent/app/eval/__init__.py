@@ -1,1 +1,2 @@
-"""Evaluations over suites: many episodes in parallel, results appended, figures at the end."""
+"""Evaluations over suites, and the frontier network's training data: many episodes or homes in parallel,
+results appended as each finishes, figures at the end."""

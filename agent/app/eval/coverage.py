@@ -11,6 +11,7 @@ of mixing two networks in one table.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import sys
@@ -18,7 +19,7 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from agent.acsg.metrics import mean_and_sem
 from agent.app.eval.runner import read_results
 from agent.lfe.methods import Method
 from agent.app.runtime.pool import as_finished
+
+if TYPE_CHECKING:
+    from agent.lfe.estimator import LearnedEstimator
 
 #: Floor area (m²) of each size of home: the generator's 60-300 m² in three bands.
 SIZES: dict[str, tuple[float, float]] = {"small": (60.0, 100.0), "medium": (100.0, 180.0), "large": (180.0, 300.0)}
@@ -79,28 +83,44 @@ def home_area(size: str, seed: int) -> float:
     return float(np.random.default_rng(seed).uniform(low, high))
 
 
-_ESTIMATORS: dict[str, Any] = {}  # per process: one network, loaded on the first learned episode
+@functools.lru_cache(maxsize=None)
+def load_estimator(model: Path | None) -> LearnedEstimator:
+    """The network of ``model``, loaded once per process: on the first learned episode a worker runs.
+
+    Args:
+        model: the network file; None for the shipped one.
+
+    Returns:
+        The estimator, the same object on every later call with the same ``model``.
+    """
+    from agent.lfe.estimator import LearnedEstimator
+
+    return LearnedEstimator.load(model)
 
 
 def run_job(job: CoverageJob, model: Path | None) -> dict[str, Any]:
-    """One result row: the home of ``job`` explored by its method."""
+    """One episode of the evaluation, run in a worker process or here.
+
+    Args:
+        job: the home and the method.
+        model: the network file of the learned methods; None for the shipped one.
+
+    Returns:
+        The episode's result row: the final coverage, the curve every `CURVE_EVERY` steps and the
+        planning statistics.
+    """
     import torch
 
-    from agent.lfe.coverage import CoverageConfig, TrueHome, run_coverage
-    from agent.lfe.estimator import LearnedEstimator
+    from agent.lfe.coverage import run_coverage
     from agent.lfe.methods import make_chooser
+    from agent.lfe.task import CoverageConfig, TrueHome
     from worlds.home import generate_home
 
     torch.set_num_threads(1)  # one episode per core: workers, not threads, use the machine
     started = time.monotonic()
     config = CoverageConfig(budget_steps=job.steps)
     home = TrueHome.from_home(generate_home(job.seed, area_m2=home_area(job.size, job.seed)), config, job.seed)
-    estimator = None
-    if job.method in LEARNED:
-        key = str(model)
-        if key not in _ESTIMATORS:
-            _ESTIMATORS[key] = LearnedEstimator.load(model)
-        estimator = _ESTIMATORS[key]
+    estimator = load_estimator(model) if job.method in LEARNED else None
     result = run_coverage(home, make_chooser(job.method, home, estimator, config), config)
     return {"size": job.size, "seed": job.seed, "method": job.method, "budget": job.steps, "model": job.model,
             "area_m2": round(home.area_m2, 2),

@@ -1,4 +1,4 @@
-"""Training data for the frontier-property network (paper §V-B).
+"""Training samples for the frontier-property network, one home at a time (paper §V-B).
 
 "Generated from many seeded homes by running plain frontier exploration and recording partial
 maps with frontier labels": each home of `worlds.home.generate_home` is explored once by FBE-Near
@@ -7,33 +7,26 @@ instead so that the recorded maps are not all of one kind. Every few planning st
 map is recorded at the network's resolution together with every offered frontier's ground-truth
 R_A, D_in and D_out (`agent.lfe.properties`), written on the frontier's pixels.
 
-One compressed shard per home (`agent.lfe.shards`) holds the snapshots and the frontier pixels'
-targets; the maps span the home's bounding box (the simulator's grid, so no crop is needed), and of
-two frontiers sharing a pixel the one with the larger R_A labels it.
+The arrays of one home make one shard (`agent.lfe.shards`): the snapshots and the frontier
+pixels' targets; the maps span the home's bounding box (the simulator's grid, so no crop is
+needed), and of two frontiers sharing a pixel the one with the larger R_A labels it.
 
 A frontier pixel is a coarse cell holding one of the frontier's cells that also reads as a
 frontier on the coarse map (FREE, with an UNKNOWN 8-neighbour, `frontier_pixel_mask`): a fine frontier
 cell can share its coarse cell with an obstacle or have its unknown neighbours inside that cell,
 and the network cannot tell such a pixel from the space around it.
-
-Shards are written whole (a temporary file, then a rename), so a run that is stopped leaves no
-half shard, and a rerun skips the homes whose shard is there.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from agent.lfe.coverage import CoverageConfig, FrontierChooser, Situation, TrueHome, fbe_near, run_coverage
+from agent.lfe.coverage import fbe_near, run_coverage
 from agent.lfe.properties import label_frontiers
-from agent.app.runtime.pool import as_finished
-from agent.lfe.shards import shard_path, write_shard
 from agent.lfe.raster import coarse_cells, coarsening_factor, encode_map, frontier_pixel_mask
+from agent.lfe.task import CoverageConfig, FrontierChooser, Situation, TrueHome
 from worlds.home import generate_home
 
 MODEL_RESOLUTION = 0.1
@@ -50,11 +43,21 @@ class DataConfig:
     snapshot every fourth gives some 25–40 maps per home, a few steps of travel apart: nearer
     snapshots would mostly repeat each other. One choice in five is a random frontier: enough to
     send the robot across the home now and then, while keeping the maps those of an explorer.
+
+    Args:
+        coverage: the exploration that is recorded.
+        record_every: planning steps between recorded snapshots (the first is recorded).
+        explore_noise: chance of choosing a random frontier instead of the nearest.
+        model_resolution: the network's cells (m); a whole multiple of the exploration's.
+
+    Raises:
+        ValueError: ``record_every`` not a positive integer, ``explore_noise`` not a probability,
+            or a resolution that is not a whole multiple of the exploration's.
     """
 
     coverage: CoverageConfig = CoverageConfig()
-    record_every: int = 4  # planning steps between recorded snapshots (the first is recorded)
-    explore_noise: float = 0.2  # chance of choosing a random frontier instead of the nearest
+    record_every: int = 4
+    explore_noise: float = 0.2
     model_resolution: float = MODEL_RESOLUTION
 
     def __post_init__(self) -> None:
@@ -69,71 +72,24 @@ class DataConfig:
             raise ValueError(f"model_resolution: {error}") from None
 
 
-@dataclass(frozen=True)
-class DatasetSummary:
-    """What one `generate_dataset` call did."""
-
-    out_dir: Path
-    written: tuple[int, ...]  # seeds whose shard this call wrote, in the order they finished
-    skipped: tuple[int, ...]  # seeds whose shard was there already
-    snapshots: int  # maps in the shards written
-    pixels: int  # frontier pixels in them
-    seconds: float
-
-    def __str__(self) -> str:
-        return (f"{self.out_dir}: {len(self.written)} homes written ({self.snapshots} maps, {self.pixels} frontier "
-                f"pixels), {len(self.skipped)} already there, {self.seconds:.0f} s")
-
-
 def home_samples(seed: int, config: DataConfig = DataConfig()) -> dict[str, np.ndarray]:
-    """Explore the home of ``seed`` once and return its shard's arrays (see the module's docstring).
+    """Explore the home of ``seed`` once and record its training samples (see the module's docstring).
 
     The home, the start pose and every random choice of the explorer come from ``seed``: the same
     seed and config give the same arrays.
+
+    Args:
+        seed: the home's seed (`worlds.home.generate_home`), its start pose's and the explorer's.
+        config: how the exploration runs and what it records.
+
+    Returns:
+        The arrays of the home's shard (`agent.lfe.shards.SHARD_ARRAYS`).
     """
     home = TrueHome.from_home(generate_home(seed), config.coverage, seed)
     recorder = _Recorder(home, config)
     chooser = _noisy_nearest(np.random.default_rng([seed, _NOISE_STREAM]), config.explore_noise)
     run_coverage(home, chooser, config.coverage, on_plan=recorder)
     return recorder.arrays(seed)
-
-
-def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = DataConfig(), workers: int = 1,
-                     progress: Callable[[int, int, int | None], None] | None = None) -> DatasetSummary:
-    """Write one shard per seed into ``out_dir``, skipping the seeds whose shard is there.
-
-    ``progress(done, total, samples)`` is called once per home, skipped ones first, with the maps
-    this call recorded in it (None for a skipped home, so that an estimate of the time left can
-    leave those out). With ``workers`` > 1, homes are explored in
-    that many processes and each shard is written as its home finishes; if one home fails, the
-    shards already written stay, so a rerun picks up where this one stopped.
-    """
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers: must be a positive integer, got {workers!r}")
-    unique = list(dict.fromkeys(int(seed) for seed in seeds))
-    if any(seed < 0 for seed in unique):
-        raise ValueError(f"seeds: must not be negative, got {min(unique)}")
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    started = time.monotonic()
-    there = {seed for seed in unique if shard_path(out_dir, seed).exists()}
-    skipped = [seed for seed in unique if seed in there]
-    todo = [seed for seed in unique if seed not in there]
-    done = 0
-    for _ in skipped:
-        done += 1
-        if progress is not None:
-            progress(done, len(unique), None)
-    written, snapshots, pixels = [], 0, 0
-    for (seed, _), arrays in as_finished(home_samples, [(seed, config) for seed in todo], workers):
-        write_shard(shard_path(out_dir, seed), arrays)
-        written.append(seed)
-        snapshots += len(arrays["maps"])
-        pixels += len(arrays["pixels"])
-        done += 1
-        if progress is not None:
-            progress(done, len(unique), len(arrays["maps"]))
-    return DatasetSummary(out_dir, tuple(written), tuple(skipped), snapshots, pixels, time.monotonic() - started)
 
 
 class _Recorder:
