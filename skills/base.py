@@ -46,7 +46,7 @@ from py_trees.common import Access, Status
 
 from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
-from agent.perception.geometry import PartGeometry
+from agent.perception.part_geometry import PartGeometry
 from worlds.bus.link import WorldLink
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, Step
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from agent.perception.geometry import DEFAULT_AMOUNT
+from agent.perception.part_motion import DEFAULT_AMOUNT
 from worlds.bus.link import WorldLink
 from skills.base import ArmSkill, SkillResult, SkillTarget
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
