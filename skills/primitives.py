@@ -3,7 +3,7 @@ object away to an idle spot and back, and move the wrist camera to look at a poi
 
 Each is a small `skills.base.ArmSkill`: what it needs from the `SkillTarget` on the blackboard, and
 which `skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the ACSG's primitive name
-(`agent.acsg.graph.PRIMITIVES`); the first docstring line is what ``homebot skills`` lists.
+(`agent.acsg.primitives.PRIMITIVES`); the first docstring line is what ``homebot skills`` lists.
 """
 
 from __future__ import annotations

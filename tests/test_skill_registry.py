@@ -76,7 +76,7 @@ def test_bench_skills_reports_ik_and_trajectory_figures() -> None:
 
 
 def test_homebot_ships_the_seven_primitives_under_their_acsg_names() -> None:
-    from agent.acsg.graph import PRIMITIVES
+    from agent.acsg.primitives import PRIMITIVES
     from skills.primitives import PRIMITIVES as SHIPPED
 
     entries = {entry.name: entry for entry in installed_skills() if entry.distribution == "homebot"}
