@@ -53,8 +53,9 @@ from skills.robot import Robot, RobotConfig
 from worlds.bus.rpc import QueryFailed
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
-from agent.perception.geometry import GeometryError
-from agent.perception.memory import STORAGE_CATEGORIES, Instance, InstanceMemory, MemoryConfig
+from agent.perception.directions import GeometryError
+from agent.perception.instances import STORAGE_CATEGORIES, Instance, MemoryConfig
+from agent.perception.memory import InstanceMemory
 from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.planning.room_goal import RoomFloors, room_of_piece
 from agent.planning.route import Routes, routes_from

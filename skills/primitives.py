@@ -3,8 +3,8 @@ object away to an idle spot and back, and move the wrist camera to look at a poi
 
 Each is a small `skills.base.ArmSkill`: the input ports it adds to the base's, and which
 `skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the name it is registered under
-(pyproject.toml's ``homebot.skills`` entry points), which the scene-graph executor asks the
-registry for; the first docstring line is what ``homebot skills`` lists.
+(pyproject.toml's ``homebot.skills`` entry points; `agent.acsg.primitives`), which the
+scene-graph executor asks the registry for; the first docstring line is what ``homebot skills`` lists.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from agent.perception.geometry import DEFAULT_AMOUNT, PartGeometry
+from agent.perception.part_geometry import PartGeometry
+from agent.perception.part_motion import DEFAULT_AMOUNT
 from skills.base import ArmSkill, SkillResult
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
 from skills.ports import input_port

@@ -52,16 +52,14 @@ from agent.acsg.keep_clear import kept_clear
 from worlds.bus.rpc import QueryFailed
 from agent.mapping.camera import nearest_seen_ahead
 from agent.observation import Observation
+from agent.perception.directions import GeometryError
 from agent.perception.frames import detect, frame_labels
-from agent.perception.geometry import (
-    GeometryError,
-    PartGeometry,
-    handle_geometry,
-    opening_seen,
-    part_motion,
-    top_grasp_point,
-)
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.grasp_poses import top_grasp_point
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.perception.opening import opening_seen
+from agent.perception.part_geometry import PartGeometry, handle_geometry
+from agent.perception.part_motion import part_motion
 from agent.perception.voxels import centres
 from agent.planning.route import Routes
 from worlds.bus.link import WorldLink

@@ -10,9 +10,10 @@ import pytest
 
 from agent.acsg.decision import PROPOSER_USER, VERIFIER_USER, PromptDecisionModule, RuleDecisionModule
 from agent.acsg.explore import ExploreConfig, explore
-from agent.acsg.graph import ActionNode, ObjectNode, from_ground_truth
 from agent.acsg.interfaces import DecisionContext, SkillCall, SkillResult
+from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import aligned_edit_distance, episode_metrics, position_recovery
+from agent.acsg.nodes import ActionNode, ObjectNode
 from agent.acsg.plan import retrieval_plan
 from agent.acsg.symbolic import SymbolicScene, Thing
 from agent.vlm.protocol import VisualQuery

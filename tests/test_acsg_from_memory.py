@@ -7,7 +7,8 @@ import pytest
 
 from agent.acsg.from_memory import memory_detections
 from agent.mapping.camera import Intrinsics
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
 from agent.perception.voxels import keys_of
 from worlds.robot import CameraConfig
 from worlds.sim import World

@@ -84,7 +84,7 @@ def test_node_ids_do_not_matter() -> None:
 
 
 def test_a_ground_truth_scene_against_itself_with_an_object_dropped() -> None:
-    from agent.acsg.graph import from_ground_truth
+    from agent.acsg.json_format import from_ground_truth
     from worlds.tabletop import tabletop_variant
 
     truth = tabletop_variant("drawer-door", 1).ground_truth_acsg()

@@ -8,7 +8,8 @@ import pytest
 
 from agent.acsg.graph import ACSG
 from agent.app.eval.robot_tabletop import in_world_ids, run_robot
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
 
 pytestmark = pytest.mark.slow
 

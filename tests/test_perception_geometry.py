@@ -11,24 +11,17 @@ import math
 import numpy as np
 import pytest
 
-from agent.perception.geometry import (
-    GeometryError,
-    PartGeometry,
-    classify_part,
+from agent.perception.directions import GeometryError, front_normal, principal_axis, snap_handle_axis
+from agent.perception.grasp_poses import (
     closing_waypoints,
-    front_normal,
     grasp_pose,
-    handle_geometry,
-    moved_geometry,
     opening_waypoints,
-    part_geometry,
     pregrasp_pose,
-    principal_axis,
-    rotation_about,
-    snap_handle_axis,
     top_grasp_point,
 )
 from agent.perception.memory import InstanceMemory
+from agent.perception.part_geometry import PartGeometry, classify_part, handle_geometry, part_geometry
+from agent.perception.part_motion import moved_geometry, rotation_about
 from test_perception_scene import INTRINSICS, Box, Front, look_at, render, storage
 
 NOISE_M = 0.002

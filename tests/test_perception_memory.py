@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from agent.mapping.camera import Intrinsics
-from agent.perception.memory import Instance, InstanceMemory, MemoryConfig
+from agent.perception.instances import Instance, MemoryConfig
+from agent.perception.memory import InstanceMemory
 from test_perception_scene import INTRINSICS, Box, Front, look_at, render, storage
 
 TABLE = Box.at(1, "table", (0.0, 0.1, 0.73), (1.6, 0.9, 0.04))

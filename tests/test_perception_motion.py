@@ -14,8 +14,11 @@ import pytest
 from scipy.spatial import cKDTree
 
 from agent.acsg.from_memory import memory_detections
-from agent.perception.geometry import PartGeometry, fit_opening, opening_seen, part_motion, rotation_about
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.perception.opening import fit_opening, opening_seen
+from agent.perception.part_geometry import PartGeometry
+from agent.perception.part_motion import part_motion, rotation_about
 from agent.perception.voxels import pack, voxel_indices
 from test_perception_scene import FRONT, INTRINSICS, Box, Front, handle_boxes, look_at, render, storage
 

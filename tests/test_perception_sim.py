@@ -17,8 +17,10 @@ import pybullet as p
 import pytest
 
 from agent.mapping.camera import Intrinsics
-from agent.perception.geometry import handle_geometry, opening_waypoints
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.grasp_poses import opening_waypoints
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.perception.part_geometry import handle_geometry
 from worlds.camera import render
 from worlds.robot import CameraConfig
 from worlds.scene import StorageBody, add_storage

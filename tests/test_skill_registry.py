@@ -148,7 +148,7 @@ def test_bench_skills_reports_ik_and_trajectory_figures() -> None:
 
 
 def test_homebot_ships_the_seven_primitives_under_their_acsg_names() -> None:
-    from agent.acsg.graph import PRIMITIVES
+    from agent.acsg.primitives import PRIMITIVES
 
     registry = SkillRegistry()
     shipped = {entry.name: entry for entry in registry.entries() if entry.distribution == "homebot"}

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis
+from agent.perception.grasp_poses import grasp_pose
+from agent.perception.part_geometry import PartGeometry, hinge_axis
 from skills.arm.grasps import (
     FINGERTIP_M,
     HANDLE_TOP_M,

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from agent.perception.geometry import PartGeometry, hinge_axis, moved_geometry
+from agent.perception.part_geometry import PartGeometry, hinge_axis
+from agent.perception.part_motion import moved_geometry
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig

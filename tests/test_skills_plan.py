@@ -8,7 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from agent.perception.geometry import PartGeometry, grasp_pose, hinge_axis, moved_geometry
+from agent.perception.grasp_poses import grasp_pose
+from agent.perception.part_geometry import PartGeometry, hinge_axis
+from agent.perception.part_motion import moved_geometry
 from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance
 from skills.arm.plan import (
     APPROACH_M,

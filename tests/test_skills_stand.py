@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from agent.perception.geometry import PartGeometry, hinge_axis, part_geometry
+from agent.perception.part_geometry import PartGeometry, hinge_axis, part_geometry
 from skills.arm.plan import ArmPlanner, SkillPlanError
 from skills.arm.stand import StandConfig, candidate_poses, choose_stand, hand_clearance, stand_pose, swept_clearance
 from worlds.robot import CameraConfig

@@ -22,8 +22,10 @@ import zenoh
 from worlds.bus.keys import Keys
 from agent.mapping.camera import back_project
 from agent.observation import Observation
-from agent.perception.geometry import PartGeometry, handle_geometry, top_grasp_point
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.grasp_poses import top_grasp_point
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.perception.part_geometry import PartGeometry, handle_geometry
 from worlds.bus.link import WorldLink
 from skills.base import SkillResult
 from skills.context import SkillContext

@@ -1,6 +1,9 @@
 """Action-conditioned scene graphs and interactive exploration (RoboEXP), as a pure library.
 
-- `graph`: the ACSG (object and action nodes, four edge kinds, kept acyclic), JSON, ground truth;
+- `nodes`: object and action nodes and the four edge kinds;
+- `graph`: the ACSG and its edits, kept acyclic; `order`: paths, ancestors, topological order, depth;
+- `json_format`: our JSON, the ground truth's, and files of either;
+- `primitives`: the skill names an action runs and what undoes each;
 - `plan`: object retrieval, the actions on the paths from the roots in topological order;
 - `draw`: a layered picture of a graph;
 - `interfaces`: Perception, DecisionModule and SkillExecutor, and what crosses them;
@@ -16,17 +19,7 @@ are imported only when used.
 
 from agent.acsg.decision import PromptDecisionModule, RuleDecisionModule
 from agent.acsg.explore import ExplorationResult, ExploreConfig, Explorer, LogEntry, explore
-from agent.acsg.graph import (
-    ACSG,
-    ACSGError,
-    ActionNode,
-    CycleError,
-    Edge,
-    ObjectNode,
-    UnknownObjectError,
-    from_ground_truth,
-    load_acsg,
-)
+from agent.acsg.graph import ACSG, CycleError, UnknownObjectError
 from agent.acsg.interfaces import (
     DecisionContext,
     DecisionModule,
@@ -36,6 +29,8 @@ from agent.acsg.interfaces import (
     SkillExecutor,
     SkillResult,
 )
+from agent.acsg.json_format import from_ground_truth, load_acsg
+from agent.acsg.nodes import ACSGError, ActionNode, Edge, ObjectNode
 from agent.acsg.plan import retrieval_actions, retrieval_plan
 from agent.acsg.symbolic import SymbolicScene, Thing
 

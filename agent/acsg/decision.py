@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from agent.acsg.graph import ActionNode, ObjectNode
 from agent.acsg.interfaces import DecisionContext, Detection, Proposal, object_id
+from agent.acsg.nodes import ActionNode, ObjectNode
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
 
 #: Storage whose doors or drawers can hide things (also what a part alone is called).

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from agent.acsg.graph import ACSG, ActionNode
+from agent.acsg.graph import ACSG
+from agent.acsg.nodes import ActionNode
+from agent.acsg.order import depths, topological_order
 
 EDGE_COLOURS = {
     "object-object": "#4d4d4d",
@@ -23,9 +25,9 @@ _ACTION_STYLE = {"boxstyle": "square,pad=0.35", "facecolor": "#fde2c8", "edgecol
 
 def layout(graph: ACSG) -> dict[str, tuple[float, float]]:
     """Node id -> (x, y): y is minus the depth, x the rank within the layer, centred."""
-    depth = graph.depths()
+    depth = depths(graph)
     layers: dict[int, list[str]] = {}
-    for node in graph.topological_order():
+    for node in topological_order(graph):
         layers.setdefault(depth[node], []).append(node)
     position: dict[str, tuple[float, float]] = {}
     for level in sorted(layers):

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from agent.acsg.graph import ACSG, ActionNode, ACSGError, CycleError, ObjectNode, open_primitive
+from agent.acsg.graph import ACSG, CycleError
 from agent.acsg.interfaces import (
     PROPOSALS,
     DecisionContext,
@@ -46,6 +46,8 @@ from agent.acsg.interfaces import (
     SkillExecutor,
     object_id,
 )
+from agent.acsg.nodes import ACSGError, ActionNode, ObjectNode
+from agent.acsg.primitives import PICK_AWAY, open_primitive
 
 #: Labels of parts that open; a part with a handle of its own opens too, whatever its label.
 OPENABLE_PARTS = frozenset({"door", "drawer", "flap", "lid"})
@@ -243,7 +245,7 @@ class Explorer:
         action_id = f"pick:{obj.instance or obj.id}"
         if action_id in self.graph:
             return self.graph.action(action_id)
-        action = self.graph.add_action(action_id, "pick", obj.id, "pick_away")
+        action = self.graph.add_action(action_id, "pick", obj.id, PICK_AWAY)
         self.unexplored[action.id] = None
         return action
 

@@ -25,8 +25,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from agent.acsg.interfaces import Detection
-from agent.perception.geometry import GeometryError, handle_geometry
-from agent.perception.memory import Instance, InstanceMemory
+from agent.perception.directions import GeometryError
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.perception.part_geometry import handle_geometry
 
 PARTS = ("door", "drawer")
 HANDLE = "handle"

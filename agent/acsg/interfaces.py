@@ -13,7 +13,8 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 
-from agent.acsg.graph import ACSG, ActionNode, ObjectNode
+from agent.acsg.graph import ACSG
+from agent.acsg.nodes import ActionNode, ObjectNode
 
 Proposal = Literal["open", "pick", "none"]
 PROPOSALS: tuple[str, ...] = ("open", "pick", "none")
@@ -60,7 +61,7 @@ class Detection:
 
 @dataclass(frozen=True)
 class SkillCall:
-    """One primitive to run: ``primitive`` (a `graph.PRIMITIVES` name) on the object ``target``
+    """One primitive to run: ``primitive`` (a `primitives.PRIMITIVES` name) on the object ``target``
     (a node id; ``instance`` is the perception's id for it), for the ACSG action ``action``."""
 
     primitive: str

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from agent.perception.geometry import DEFAULT_AMOUNT, GeometryError, handle_geometry, part_motion
+from agent.perception.directions import GeometryError
 from agent.perception.memory import InstanceMemory
+from agent.perception.part_geometry import handle_geometry
+from agent.perception.part_motion import DEFAULT_AMOUNT, part_motion
 
 
 #: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching

@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from agent.acsg.graph import ACSG, ActionNode, ObjectNode
+from agent.acsg.graph import ACSG
+from agent.acsg.nodes import ActionNode, ObjectNode
 
 
 def node_label(node: ObjectNode | ActionNode) -> str:

@@ -10,7 +10,9 @@ what must be done, and the DAG's order is an order that works.
 
 from __future__ import annotations
 
-from agent.acsg.graph import ACSG, ActionNode, ObjectNode
+from agent.acsg.graph import ACSG
+from agent.acsg.nodes import ActionNode, ObjectNode
+from agent.acsg.order import ancestors, topological_order
 
 _VERB = {"open": "open", "close": "close", "pick": "pick away", "place": "place", "look": "look at"}
 
@@ -18,8 +20,8 @@ _VERB = {"open": "open", "close": "close", "pick": "pick away", "place": "place"
 def retrieval_actions(graph: ACSG, target: ObjectNode | str) -> list[ActionNode]:
     """The actions to run before ``target`` (a node, id, instance or label) can be taken."""
     node = target if isinstance(target, ObjectNode) else graph.find_object(target)
-    ancestors = graph.ancestors(node.id)
-    return [graph.action(n) for n in graph.topological_order(ancestors) if graph.node(n).kind == "action"]
+    before = ancestors(graph, node.id)
+    return [graph.action(n) for n in topological_order(graph, before) if graph.node(n).kind == "action"]
 
 
 def describe_action(graph: ACSG, action: ActionNode) -> str:

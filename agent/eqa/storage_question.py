@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from agent.perception.memory import STORAGE_CATEGORIES
+from agent.perception.instances import STORAGE_CATEGORIES
 
 _STORAGE_WORDS = "|".join(re.escape(w) for w in sorted(STORAGE_CATEGORIES, key=len, reverse=True))
 

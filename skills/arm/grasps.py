@@ -37,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agent.perception.geometry import PartGeometry, grasp_pose
+from agent.perception.grasp_poses import grasp_pose
+from agent.perception.part_geometry import PartGeometry
 
 UP = np.array([0.0, 0.0, 1.0])
 #: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision

@@ -61,7 +61,9 @@ from typing import Any
 
 import numpy as np
 
-from agent.perception.geometry import PartGeometry, grasp_pose, moved_geometry
+from agent.perception.grasp_poses import grasp_pose
+from agent.perception.part_geometry import PartGeometry
+from agent.perception.part_motion import moved_geometry
 from skills.arm.grasps import (
     LIFT_OFF_M,
     TOUCH_SEARCH_M,

@@ -29,7 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agent.perception.geometry import PartGeometry, grasp_pose, part_motion
+from agent.perception.grasp_poses import grasp_pose
+from agent.perception.part_geometry import PartGeometry
+from agent.perception.part_motion import part_motion
 from skills.arm.grasps import hand_corners
 from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
 

@@ -16,7 +16,8 @@ import sys
 from pathlib import Path
 
 from agent.acsg.draw import draw_acsg
-from agent.acsg.graph import ACSGError, load_acsg
+from agent.acsg.json_format import load_acsg
+from agent.acsg.nodes import ACSGError
 from agent.acsg.plan import retrieval_plan
 
 

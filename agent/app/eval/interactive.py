@@ -26,7 +26,7 @@ from typing import Any
 
 from agent.acsg.decision import RuleDecisionModule
 from agent.acsg.explore import explore
-from agent.acsg.graph import from_ground_truth
+from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene
 from agent.app.eval.runner import read_results

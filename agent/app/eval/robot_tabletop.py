@@ -20,7 +20,8 @@ import numpy as np
 
 from agent.acsg.decision import RuleDecisionModule
 from agent.acsg.explore import explore
-from agent.acsg.graph import ACSG, from_ground_truth
+from agent.acsg.graph import ACSG
+from agent.acsg.json_format import acsg_from_dict, acsg_to_dict, from_ground_truth
 from agent.acsg.metrics import episode_metrics
 from skills.robot import Robot
 from agent.perception.memory import InstanceMemory
@@ -98,7 +99,7 @@ def in_world_ids(graph: ACSG, memory: InstanceMemory) -> ACSG:
         world_id = f"m{node.instance}" if hint is None or str(hint) in taken else str(hint)
         taken.add(world_id)
         names[node.id] = f"o{world_id}"
-    data = graph.to_dict()
+    data = acsg_to_dict(graph)
     for node in data["nodes"]:
         old = node["id"]
         if node["kind"] == "object":
@@ -112,4 +113,4 @@ def in_world_ids(graph: ACSG, memory: InstanceMemory) -> ACSG:
                 node["params"]["handle"] = names[handle]
     for edge in data["edges"]:
         edge["source"], edge["target"] = names[edge["source"]], names[edge["target"]]
-    return ACSG.from_dict(data)
+    return acsg_from_dict(data)

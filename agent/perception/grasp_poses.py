@@ -1,0 +1,137 @@
+"""Where the gripper goes: TCP poses on a handle, along an opening, and on top of an object.
+
+TCP convention (what the kinematics takes as targets). A TCP pose is a 4x4 world transform whose
+rotation columns are the gripper's axes:
+
+- z (approach) = -normal: the gripper comes at the front from outside, pointing into it;
+- x = the handle's axis: the bar lies along x, between the fingers;
+- y = z × x: the fingers close along y, across the bar;
+- the origin is the grasp point: the centre of the handle's points.
+
+The grasp is symmetric under a half turn about z (x, y -> -x, -y); an arm may take whichever of
+the two suits its joint limits. Along an opening, the TCP rides with the part: a drawer's TCP keeps
+its orientation and moves along the normal; a door's TCP turns with the door about the hinge.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from agent.perception.directions import GeometryError, checked_points, unit_vector
+from agent.perception.part_geometry import PartGeometry
+from agent.perception.part_motion import part_motion
+
+#: The paper's revolute step, and ours for drawers (2 cm), when no step count is given.
+DOOR_STEP_RAD = math.radians(5.0)
+DRAWER_STEP_M = 0.02
+#: Pre-grasp stand-off along the normal (the paper's 3 cm).
+PREGRASP_M = 0.03
+
+
+def grasp_rotation(geometry: PartGeometry) -> np.ndarray:
+    """The TCP orientation at the handle, fingers across the bar.
+
+    Args:
+        geometry: the part whose handle is grasped.
+
+    Returns:
+        A 3x3 rotation: columns x = handle axis, y = z × x, z = -normal.
+    """
+    z = -geometry.normal
+    x = unit_vector(geometry.handle_axis - (geometry.handle_axis @ z) * z, "handle_axis")
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def grasp_pose(geometry: PartGeometry) -> np.ndarray:
+    """The TCP pose closing on the handle (see the module docstring for the axes).
+
+    Args:
+        geometry: the part whose handle is grasped.
+
+    Returns:
+        A 4x4 world-frame TCP pose at the grasp point.
+    """
+    return _pose(grasp_rotation(geometry), geometry.handle_point)
+
+
+def pregrasp_pose(geometry: PartGeometry, standoff_m: float = PREGRASP_M) -> np.ndarray:
+    """Where the approach to the handle starts: the grasp pose backed off along the normal.
+
+    Args:
+        geometry: the part whose handle is grasped.
+        standoff_m: how far in front of the handle.
+
+    Returns:
+        A 4x4 world-frame TCP pose.
+    """
+    return _pose(grasp_rotation(geometry), geometry.handle_point + standoff_m * geometry.normal)
+
+
+def opening_waypoints(geometry: PartGeometry, amount: float, n: int | None = None) -> list[np.ndarray]:
+    """TCP poses that open the part, riding with it: a door's TCP turns with the door, so the
+    fingers stay across the bar.
+
+    Args:
+        geometry: the part as seen before this motion.
+        amount: radians for a door (about ``hinge_axis``), metres for a drawer (along ``normal``);
+            a negative amount moves the other way (closing a part whose geometry was taken
+            while it stood open).
+        n: how many steps of equal size; by default 5° or 2 cm per step.
+
+    Returns:
+        n + 1 poses (4x4) from `grasp_pose` to the part opened by ``amount``.
+
+    Raises:
+        GeometryError: ``n`` is not a positive whole number.
+    """
+    steps = _steps(geometry, amount, n)
+    start = grasp_pose(geometry)
+    poses = []
+    for value in np.linspace(0.0, amount, steps + 1):
+        poses.append(part_motion(geometry, float(value)) @ start)
+    return poses
+
+
+def closing_waypoints(geometry: PartGeometry, amount: float, n: int | None = None) -> list[np.ndarray]:
+    """TCP poses that close the part again: `opening_waypoints` reversed.
+
+    Args:
+        geometry: the part as seen closed (what `part_geometry` measured before opening it).
+        amount: how far it stands open (see `opening_waypoints`).
+        n: how many steps of equal size; by default 5° or 2 cm per step.
+
+    Returns:
+        Poses (4x4) from the part opened by ``amount`` back to closed.
+    """
+    return opening_waypoints(geometry, amount, n)[::-1]
+
+
+def top_grasp_point(points: np.ndarray, band_m: float = 0.01) -> np.ndarray:
+    """The paper's top-down pick point, where a gripper coming from above first closes.
+
+    Args:
+        points: (N, 3) points of the object, at least 1.
+        band_m: how far below the highest point still counts as its top.
+
+    Returns:
+        The mean of the points within ``band_m`` of the highest.
+    """
+    pts = checked_points(points, "points", minimum=1)
+    return pts[pts[:, 2] >= pts[:, 2].max() - band_m].mean(axis=0)
+
+
+def _steps(geometry: PartGeometry, amount: float, n: int | None) -> int:
+    if n is not None:
+        if int(n) != n or n < 1:
+            raise GeometryError(f"n: {n!r} must be a positive number of steps")
+        return int(n)
+    step = DOOR_STEP_RAD if geometry.kind == "door" else DRAWER_STEP_M
+    return max(1, math.ceil(abs(amount) / step - 1e-9))
+
+
+def _pose(rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rotation, position
+    return pose
