@@ -48,7 +48,8 @@ from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
 from agent.perception.geometry import PartGeometry
 from worlds.bus.link import WorldLink
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, Step
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 
 log = logging.getLogger(__name__)
 

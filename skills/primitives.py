@@ -16,7 +16,8 @@ import numpy as np
 from agent.perception.geometry import DEFAULT_AMOUNT
 from worlds.bus.link import WorldLink
 from skills.base import ArmSkill, SkillResult, SkillTarget
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 
 
 

@@ -65,7 +65,8 @@ from agent.planning.route import Routes
 from worlds.bus.link import WorldLink
 from skills import base as skill_base
 from skills.arm.idle_space import idle_spot, reach_along
-from skills.arm.plan import ArmPlanner, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
 from skills.primitives import PRIMITIVES
 from skills.arm.stand import NoStandError, StandConfig, choose_stand, stand_pose
 from skills.stow import Stow

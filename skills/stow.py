@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from skills.base import ArmSkill, SkillTarget
-from skills.arm.plan import ArmPlanner, SkillPlan
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan
 
 
 class Stow(ArmSkill):

@@ -10,7 +10,8 @@ import zenoh
 from worlds.bus.keys import Keys
 from worlds.bus.link import WorldLink
 from skills.base import SkillTarget, run_skill
-from skills.arm.plan import ArmPlanner, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
 from skills.primitives import LookAt
 from skills.registry import load_skill
 from skills.stow import Stow

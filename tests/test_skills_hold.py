@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from agent.perception.geometry import PartGeometry, hinge_axis, moved_geometry
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
+from skills.arm.frames import base_transform
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig
 from worlds.robot_arm import STOWED, arm_spec, robot_description

@@ -20,7 +20,7 @@ object, closing across it) cannot:
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
-and ends on the first touch (`skills.arm.plan.Step.touch`); what follows is planned from where the
+and ends on the first touch (`skills.arm.skill_plan.Step.touch`); what follows is planned from where the
 top was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.
@@ -32,12 +32,12 @@ and `front_clearance` (how far the hand stays in front of a part's front).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from agent.perception.geometry import PartGeometry, grasp_pose
+from agent.pose import Pose2D
 
 UP = np.array([0.0, 0.0, 1.0])
 #: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision
@@ -192,7 +192,7 @@ def handle_top_grasps(geometry: PartGeometry) -> list[HandleGrasp]:
             for pitch in TOP_PITCHES for sign in (1.0, -1.0)]
 
 
-def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float]) -> list[np.ndarray]:
+def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Pose2D) -> list[np.ndarray]:
     """Horizontal directions for the fingers to close along (the TCP's y) on an object with box
     ``size`` at ``point``, best first, each followed by its opposite (the hand turned half a turn).
 
@@ -218,7 +218,7 @@ def across(size: np.ndarray, direction: np.ndarray) -> float:
     return float(abs(direction[0]) * size[0] + abs(direction[1]) * size[1])
 
 
-def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float], opening: float,
+def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, opening: float,
                   depth: float) -> list[ObjectGrasp]:
     """Top-down grasps of an object with box ``size`` whose grasp point is ``point``, best first:
     the fingers around it, ``depth`` below the point, along each of `closing_directions` it fits

@@ -10,7 +10,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from skills.arm.plan import SkillPlanError
+from skills.arm.skill_plan import SkillPlanError
 
 #: How far the hand reaches from the TCP across its axis (half its span along the fingers).
 HAND_RADIUS_M = 0.11

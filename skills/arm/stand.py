@@ -30,8 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.perception.geometry import PartGeometry, grasp_pose, part_motion
+from agent.pose import Pose2D
+from skills.arm.frames import base_transform
 from skills.arm.grasps import hand_corners
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 
 #: Steps along an opening at which the swept front is checked against the base.
 SWEEP_SAMPLES = 12
@@ -82,7 +85,7 @@ class Stand:
     """A base pose (x, y, yaw) to open a part from, how far to open it (rad or m), and the least
     distance the hand and the moving front keep from the base's axis over that opening."""
 
-    pose: tuple[float, float, float]
+    pose: Pose2D
     amount: float
     clearance_m: float
 
@@ -124,7 +127,7 @@ def choose_stand(planner: ArmPlanner, q: np.ndarray, geometry: PartGeometry, *,
     raise NoStandError(geometry.kind, refused, plans, config.max_plans)
 
 
-def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig()) -> list[tuple[float, float, float]]:
+def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig()) -> list[Pose2D]:
     """Base poses facing the front square on: every (hinge share, distance) pair of the config.
     Drawers and doors on a horizontal hinge (flaps) are stood before level with the handle."""
     normal = _horizontal(geometry.normal, "the part's front normal")
@@ -140,7 +143,7 @@ def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig())
     for share in shares:
         for distance in config.distances_m:
             x, y = handle + share * toward_hinge + distance * normal
-            poses.append((float(x), float(y), yaw))
+            poses.append(Pose2D(float(x), float(y), yaw))
     return poses
 
 
@@ -187,8 +190,8 @@ def _horizontal(vector: np.ndarray, what: str) -> np.ndarray:
     return flat / np.linalg.norm(flat)
 
 
-def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
-               door_share: float = 0.35, distance_m: float | None = None) -> tuple[float, float, float]:
+def stand_pose(geometry: PartGeometry, base_pose: Pose2D,
+               door_share: float = 0.35, distance_m: float | None = None) -> Pose2D:
     """Where the base should stand to open or close a part, from where it stands now.
 
     It stays as far from the part's front as it is (slid along the front, never towards it), or
@@ -211,4 +214,4 @@ def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
     there = here + along * float((aim - here) @ along)
     if distance_m is not None:
         there = aim + normal * float(distance_m)
-    return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])
+    return Pose2D(float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0]))
