@@ -9,11 +9,9 @@ or the whole robot. Poses are 4×4 homogeneous matrices of the TCP frame in the 
 
 IK runs damped least-squares descents (`skills.arm.ik_descent.IKDescent`); a run that stalls
 restarts from a random configuration drawn from a seeded generator, so a solve is reproducible.
-Targets beyond the arm's reach (`skills.arm.reach.Reach`) fail at once.
-
-Cartesian paths (drawers pulled along a line, doors swung along an arc: `skills.arm.tcp_paths`)
-chain IK solutions, each seeded from the previous one, and fail clearly when a waypoint is
-unreachable or the arm would have to jump between consecutive waypoints.
+Targets beyond the arm's reach (`skills.arm.reach.Reach`) fail at once. Cartesian paths (along
+`skills.arm.tcp_paths`) chain IK solutions, each seeded from the previous one, and fail clearly
+when a waypoint is unreachable or the arm would have to jump between consecutive waypoints.
 """
 
 from __future__ import annotations
@@ -131,7 +129,11 @@ class ArmKinematics:
         return self._reach.radius
 
     def home(self) -> np.ndarray:
-        """The middle of every joint's range: a neutral IK seed far from all limits."""
+        """A neutral IK seed far from all limits.
+
+        Returns:
+            The middle of every joint's range.
+        """
         return 0.5 * (self.lower + self.upper)
 
     def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
@@ -146,7 +148,14 @@ class ArmKinematics:
         return rng.uniform(self.lower, self.upper)
 
     def clip(self, q: np.ndarray) -> np.ndarray:
-        """Joint positions (or rows of them, ``q`` (n, dof)) brought within the limits, as a copy."""
+        """Joint positions brought within the limits.
+
+        Args:
+            q: (dof,) joint positions, or (n, dof) rows of them.
+
+        Returns:
+            A clipped copy.
+        """
         return np.clip(q, self.lower, self.upper)
 
     def within_limits(self, q: np.ndarray, tolerance: float = 1e-9) -> bool:

@@ -86,7 +86,20 @@ class PlanBuilder:
     def move(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
              tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
              touch: str | None = None) -> None:
-        """Add a move (`step`, same arguments); the plan then has the arm at its last waypoint."""
+        """Add a move; the plan then has the arm at its last waypoint.
+
+        Args:
+            name: what the move does.
+            waypoints: (n, dof) joint waypoints (see `step`).
+            careful: at the careful speed, else the free speed.
+            stop_on_contact: the move stops on the first contact.
+            tcp_target: where it ends the TCP (world).
+            part_motion: what it does to a held part.
+            touch: what a touch grasp's approach touches.
+
+        Raises:
+            SkillPlanError: Ruckig finds no trajectory.
+        """
         self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion, touch))
         self.q = self.steps[-1].waypoints[-1].copy()
 

@@ -38,10 +38,13 @@ from skills.arm.arm_model import ArmModel
 class ArmPlanner(ArmModel):
     """Plans the primitives for one robot: its URDF, its lift-and-arm joints and their limits.
 
-    Constructed as `skills.arm.arm_model.ArmModel` (usually ``ArmPlanner.from_description``). The
-    ``plan_*`` methods are the primitive families' planners with this arm bound as their first
+    The ``plan_*`` methods are the primitive families' planners with this arm bound as their first
     argument (see each for its arguments): each takes where the arm is (``q``) and where the base
     stands (``base_pose``) and returns a plan from there, and none depends on an earlier call.
+
+    Args:
+        *args: as for `skills.arm.arm_model.ArmModel` (usually built by ``ArmPlanner.from_description``).
+        **kwargs: likewise.
     """
 
     plan_open = part_plans.plan_open

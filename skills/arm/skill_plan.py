@@ -26,7 +26,11 @@ FREE_SPEED, CAREFUL_SPEED = 0.5, 0.25
 
 class SkillPlanError(RuntimeError):
     """No plan: the text names the stage and the target, e.g. ``IK: grasp pose of drawer handle
-    unreachable: target 1.02 m from the shoulder, beyond the arm's 0.95 m reach``."""
+    unreachable: target 1.02 m from the shoulder, beyond the arm's 0.95 m reach``.
+
+    Args:
+        *args: the message, as for any exception.
+    """
 
 
 def best_failure(failures: list[str], what: str) -> str:
