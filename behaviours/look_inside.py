@@ -62,7 +62,7 @@ from agent.planning.route import Routes, routes_from
 from worlds.bus.link import WorldLink
 from agent.vlm.mosaic import side_by_side
 from behaviours.approach_storage import ApproachConfig
-from skills.arm.plan import SkillPlanError
+from skills.arm.skill_plan import SkillPlanError
 from skills.arm.stand import StandConfig
 from worlds.vocabulary import room_kind
 

@@ -8,7 +8,7 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
 1. ask the world for the robot's description, once per `SkillContext` (the URDF, the arm's joints and
    limits: the planner is built from the same text the world simulates), and for the arm's state;
 2. from the joints and the TCP's world pose, read where the base stands, and plan
-   (`skills.arm.plan.ArmPlanner`): a planning error is FAILURE with its reason;
+   (`skills.arm.planner.ArmPlanner`): a planning error is FAILURE with its reason;
 3. send the plan's steps one after another (``arm_trajectory`` with the samples as an array,
    ``gripper``), RUNNING while each is in flight, and check every reply:
 
@@ -19,7 +19,7 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
      held back touching nothing else, has arrived (what follows is re-timed from where it stopped);
    - closing the gripper must catch what the step expects (a handle, an object), or, closing the
      fingers before a touch grasp's approach, nothing;
-   - a move that carries a part (`skills.arm.plan.PartMotion`) measures the part's opening from where
+   - a move that carries a part (`skills.arm.skill_plan.PartMotion`) measures the part's opening from where
      the TCP, which holds the handle, ended; the part must have gone at least `MIN_PART_SHARE` of
      the way, else "the drawer did not open"; a part held back by its joint's end (a drawer pulled
      past its travel) is fine as long as it got that far, and the opening reached is reported;
@@ -45,7 +45,8 @@ from py_trees.common import Status
 
 from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, Step
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.context import SkillContext
 from skills.ports import Port, PortedSkill, input_port, output_port
 from skills.replies import arm_state, step_problem, thing_name

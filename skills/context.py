@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from worlds.bus.link import WorldLink
 
 if TYPE_CHECKING:
-    from skills.arm.plan import ArmPlanner
+    from skills.arm.planner import ArmPlanner
 
 
 @dataclass

@@ -2,7 +2,7 @@
 object away to an idle spot and back, and move the wrist camera to look at a point.
 
 Each is a small `skills.base.ArmSkill`: the input ports it adds to the base's, and which
-`skills.arm.plan.ArmPlanner` method plans it. ``skill_name`` is the name it is registered under
+`skills.arm.planner.ArmPlanner` method plans it. ``skill_name`` is the name it is registered under
 (pyproject.toml's ``homebot.skills`` entry points; `agent.acsg.primitives`), which the
 scene-graph executor asks the registry for; the first docstring line is what ``homebot skills`` lists.
 """
@@ -17,7 +17,8 @@ import numpy as np
 from agent.perception.part_geometry import PartGeometry
 from agent.perception.part_motion import DEFAULT_AMOUNT
 from skills.base import ArmSkill, SkillResult
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 from skills.ports import input_port
 
 _GEOMETRY = input_port("geometry", PartGeometry, "the door or drawer as perceived closed (its handle, hinge or "

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from skills.arm.plan import Step
+from skills.arm.skill_plan import Step
 
 #: A move that ends further than this (rad or m, any joint) from its last sample was held back.
 BLOCKED_RAD = 0.03

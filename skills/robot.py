@@ -69,7 +69,8 @@ from skills.registry import SkillRegistry
 from skills.replies import arm_state
 from skills.running import run_to_end
 from skills.arm.idle_space import idle_spot, reach_along
-from skills.arm.plan import ArmPlanner, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
 from skills.arm.stand import NoStandError, StandConfig, choose_stand, stand_pose
 
 log = logging.getLogger(__name__)

@@ -15,7 +15,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from skills.base import ArmSkill
-from skills.arm.plan import ArmPlanner, SkillPlan
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan
 
 
 class Stow(ArmSkill):

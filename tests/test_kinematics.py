@@ -16,7 +16,8 @@ import pybullet_data
 import pytest
 
 from agent.app.bench.arm import bench_arm
-from skills.arm.kinematics import ArmKinematics, arc_poses, line_poses
+from skills.arm.kinematics import ArmKinematics
+from skills.arm.tcp_paths import arc_poses, line_poses
 from skills.arm.trajectory import JointLimits, plan_trajectory
 
 JOINTS = ["lift_joint"] + [f"panda_joint{i}" for i in range(1, 8)]

@@ -11,7 +11,8 @@ from worlds.bus.keys import Keys
 from worlds.bus.link import WorldLink
 from skills.context import SkillContext
 from skills.running import run_to_end
-from skills.arm.plan import ArmPlanner, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
 from skills.primitives import LookAt
 from skills.registry import SkillRegistry
 from skills.stow import Stow

@@ -10,7 +10,9 @@ import pytest
 
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from agent.perception.part_motion import moved_geometry
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
+from skills.arm.frames import base_transform
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig
 from worlds.robot_arm import STOWED, arm_spec, robot_description

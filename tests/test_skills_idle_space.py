@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from skills.arm.idle_space import idle_spot, reach_along
-from skills.arm.plan import SkillPlanError
+from skills.arm.skill_plan import SkillPlanError
 
 
 def _table() -> np.ndarray:

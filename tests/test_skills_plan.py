@@ -11,17 +11,12 @@ import pytest
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from agent.perception.part_motion import moved_geometry
-from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance
-from skills.arm.plan import (
-    APPROACH_M,
-    READY,
-    ArmPlanner,
-    SkillPlan,
-    SkillPlanError,
-    Step,
-    base_transform,
-    hand_bottom,
-)
+from skills.arm.arm_model import READY
+from skills.arm.frames import base_transform
+from skills.arm.grasp_lines import APPROACH_M
+from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance, hand_bottom
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
 from worlds.commands import parse_arm_trajectory
 from worlds.robot import CameraConfig

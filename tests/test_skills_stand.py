@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from agent.perception.part_geometry import PartGeometry, hinge_axis, part_geometry
-from skills.arm.plan import ArmPlanner, SkillPlanError
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
 from skills.arm.stand import StandConfig, candidate_poses, choose_stand, hand_clearance, stand_pose, swept_clearance
 from worlds.robot import CameraConfig
 from worlds.robot_arm import robot_description

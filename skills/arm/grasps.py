@@ -20,7 +20,7 @@ object, closing across it) cannot:
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
-and ends on the first touch (`skills.arm.plan.Step.touch`); what follows is planned from where the
+and ends on the first touch (`skills.arm.skill_plan.Step.touch`); what follows is planned from where the
 top was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.
@@ -32,13 +32,13 @@ and `front_clearance` (how far the hand stays in front of a part's front).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry
+from agent.pose import Pose2D
 
 UP = np.array([0.0, 0.0, 1.0])
 #: The hand's and open fingers' boxes in the TCP frame (lo, hi corners; from the Panda's collision
@@ -71,9 +71,14 @@ TILTS = (0.0, -0.3, 0.3, -0.15, 0.15)
 
 @dataclass(frozen=True, eq=False)
 class HandleGrasp:
-    """One way of holding a handle. ``offset``: the TCP's pose relative to the part's `grasp_pose`,
-    so that the grasp rides along the part's path; ``name``: what plans and reasons call it;
-    ``touch``: the fingers close before the approach, which ends on touching the handle."""
+    """One way of holding a handle, tried in turn until one reaches along the part's whole path.
+
+    Args:
+        offset: the TCP's 4×4 pose relative to the part's `grasp_pose`, so that the grasp rides
+            along the part's path.
+        name: what plans and reasons call it ("level", "from above").
+        touch: the fingers close before the approach, which ends on touching the handle.
+    """
 
     offset: np.ndarray
     name: str
@@ -82,9 +87,14 @@ class HandleGrasp:
 
 @dataclass(frozen=True, eq=False)
 class ObjectGrasp:
-    """A top-down grasp at an object's grasp point (the middle of its top): the TCP's ``rotation``,
-    ``depth`` how far below the grasp point the TCP closes (negative: above it, the fingertips on
-    the top), ``name`` as plans say it, ``touch`` as for `HandleGrasp`."""
+    """A top-down grasp at an object's grasp point (the middle of its top).
+
+    Args:
+        rotation: the TCP's 3×3 rotation.
+        depth: how far below the grasp point the TCP closes (negative: above it, the fingertips on the top).
+        name: as plans say it ("fingers-around", "fingertips-on-top").
+        touch: as for `HandleGrasp`.
+    """
 
     rotation: np.ndarray
     depth: float
@@ -97,16 +107,29 @@ _HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
 
 
 def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
-    """The corners (16, 3) of the hand's and open fingers' boxes (`HAND_BOXES`) with the TCP at
-    ``tcp_pose`` (world frame)."""
+    """Where the hand and open fingers are, for clearance checks.
+
+    Args:
+        tcp_pose: the TCP's 4×4 pose (world frame).
+
+    Returns:
+        The (16, 3) corners of the hand's and open fingers' boxes (`HAND_BOXES`).
+    """
     return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
 
 
 def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
-    """The lowest point of the hand and open fingers (`HAND_BOXES`) with the TCP at ``tcp_pose`` (world z).
+    """How low the hand comes, to keep it above a table.
 
-    With ``base`` (the base's 4x4 world pose) only the corners further than ``body_radius`` from
-    its axis count: over the robot's own body there is no table (the stowed arm sits inside it).
+    Args:
+        tcp_pose: the TCP's 4×4 pose (world frame).
+        base: the base's 4×4 world pose; with it only the corners further than ``body_radius``
+            from its axis count: over the robot's own body there is no table (the stowed arm sits
+            inside it).
+        body_radius: the base's body around its axis (m).
+
+    Returns:
+        The lowest world z of the hand's and open fingers' boxes (`HAND_BOXES`); inf when no corner counts.
     """
     corners = hand_corners(tcp_pose)
     if base is not None:
@@ -115,26 +138,42 @@ def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radiu
 
 
 def front_clearance(tcp_pose: np.ndarray, geometry: PartGeometry) -> float:
-    """How far the hand (`HAND_BOXES`) with the TCP at ``tcp_pose`` keeps in front of the part's
-    front face, its nearest corner's (negative: through it); -inf when the front's depth is unknown."""
+    """How far the hand keeps in front of a part's front face, for grasps of its handle from above.
+
+    Args:
+        tcp_pose: the TCP's 4×4 pose (world frame).
+        geometry: the part, with its front's depth behind the handle.
+
+    Returns:
+        The distance of the hand's (`HAND_BOXES`) nearest corner in front of the front (negative:
+        through it); -inf when the front's depth is unknown.
+    """
     if geometry.front_depth is None:
         return -math.inf
     ahead = (hand_corners(tcp_pose) - geometry.handle_point) @ geometry.normal
     return float(ahead.min() + geometry.front_depth)
 
 
-def rotation_z(angle: float) -> np.ndarray:
+def _rotation_z(angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def rotation_x(angle: float) -> np.ndarray:
+def _rotation_x(angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def local_pose(rotation: np.ndarray | None = None, z: float = 0.0) -> np.ndarray:
-    """A transform in the TCP's own frame: a rotation, then a shift along its (new) z."""
+    """A transform in the TCP's own frame, to back off along the gripper's axis or turn a grasp.
+
+    Args:
+        rotation: a 3×3 rotation (None: none).
+        z: the shift along the (rotated) z axis (m).
+
+    Returns:
+        The 4×4 transform: the rotation, then the shift along its new z.
+    """
     pose = np.eye(4)
     if rotation is not None:
         pose[:3, :3] = rotation
@@ -143,26 +182,49 @@ def local_pose(rotation: np.ndarray | None = None, z: float = 0.0) -> np.ndarray
 
 
 def tilted(grasp: np.ndarray, flip: float, tilt: float) -> np.ndarray:
-    """The grasp variant turned ``flip`` about the gripper's axis and ``tilt`` about the bar, the tilt
-    signed so that a negative one points the gripper down (a level bar grasped from above)."""
-    turned = rotation_z(flip)
-    rotation = turned @ rotation_x(tilt)
+    """A level grasp variant, turned about the gripper's axis and tilted about the bar.
+
+    Args:
+        grasp: the part's 4×4 `grasp_pose`.
+        flip: the turn about the gripper's axis (rad).
+        tilt: the tilt about the bar (rad), signed so that a negative one points the gripper down
+            (a level bar grasped from above).
+
+    Returns:
+        The 4×4 offset of the variant relative to ``grasp``.
+    """
+    turned = _rotation_z(flip)
+    rotation = turned @ _rotation_x(tilt)
     pointing = (grasp[:3, :3] @ rotation)[2, 2]  # the tilted approach's vertical component
     if tilt and (pointing > 0) == (tilt < 0) and abs(pointing) > 1e-6:
-        rotation = turned @ rotation_x(-tilt)
+        rotation = turned @ _rotation_x(-tilt)
     return local_pose(rotation)
 
 
 def level_grasps(closed: np.ndarray) -> list[HandleGrasp]:
-    """The usual grasps of a handle whose `grasp_pose` is ``closed``: the fingers open across the
-    bar, the hand square to the front, turned by `FLIPS` and tilted about the bar by `TILTS`."""
+    """The usual grasps of a handle: the fingers open across the bar, the hand square to the front.
+
+    Args:
+        closed: the handle's 4×4 `grasp_pose` with the part closed.
+
+    Returns:
+        The variants turned by `FLIPS` and tilted about the bar by `TILTS`, in the order to try them.
+    """
     return [HandleGrasp(tilted(closed, flip, tilt) @ local_pose(z=HANDLE_DEPTH_M), "level") for flip in FLIPS
             for tilt in TILTS]
 
 
 def top_rotation(closing: np.ndarray, pitch: float = 0.0, into: np.ndarray | None = None) -> np.ndarray:
-    """The TCP's rotation pointing down, turned ``pitch`` (rad) towards the horizontal ``into``, its
-    fingers closing along the horizontal ``closing`` (columns: x, y = closing, z = the approach)."""
+    """The TCP's rotation for a grasp from above.
+
+    Args:
+        closing: the horizontal direction the fingers close along.
+        pitch: how far the approach turns from straight down (rad) towards ``into``.
+        into: the horizontal direction to pitch towards (None: straight down).
+
+    Returns:
+        The 3×3 rotation, columns x, y = ``closing``, z = the approach.
+    """
     y = np.asarray(closing, dtype=float) / np.linalg.norm(closing)
     z = -math.cos(pitch) * UP
     if into is not None:
@@ -171,7 +233,15 @@ def top_rotation(closing: np.ndarray, pitch: float = 0.0, into: np.ndarray | Non
 
 
 def fingertips_on(rotation: np.ndarray, point: np.ndarray) -> np.ndarray:
-    """The TCP pose with ``rotation`` whose closed fingertips' ends meet at ``point``."""
+    """Where the TCP is when the closed fingertips rest on a point.
+
+    Args:
+        rotation: the TCP's 3×3 rotation.
+        point: where the fingertips' ends meet (world).
+
+    Returns:
+        The TCP's 4×4 pose.
+    """
     pose = np.eye(4)
     pose[:3, :3] = rotation
     pose[:3, 3] = np.asarray(point, dtype=float) - FINGERTIP_M * rotation[:, 2]
@@ -179,9 +249,15 @@ def fingertips_on(rotation: np.ndarray, point: np.ndarray) -> np.ndarray:
 
 
 def handle_top_grasps(geometry: PartGeometry) -> list[HandleGrasp]:
-    """Grasps of a drawer's level bar from above (see the module docstring): every pitch of
-    `TOP_PITCHES`, each with the hand either way round along the bar. None for doors (the bar
-    turns with the door) or a bar that is not level."""
+    """Grasps of a drawer's level bar from above (see the module docstring).
+
+    Args:
+        geometry: the part as seen closed.
+
+    Returns:
+        Every pitch of `TOP_PITCHES`, each with the hand either way round along the bar, in the
+        order to try them; none for doors (the bar turns with the door) or a bar that is not level.
+    """
     axis = np.asarray(geometry.handle_axis, dtype=float)
     if geometry.kind != "drawer" or abs(axis[2]) > LEVEL_SIN:
         return []
@@ -193,13 +269,20 @@ def handle_top_grasps(geometry: PartGeometry) -> list[HandleGrasp]:
             for pitch in TOP_PITCHES for sign in (1.0, -1.0)]
 
 
-def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float]) -> list[np.ndarray]:
-    """Horizontal directions for the fingers to close along (the TCP's y) on an object with box
-    ``size`` at ``point``, best first, each followed by its opposite (the hand turned half a turn).
+def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Pose2D) -> list[np.ndarray]:
+    """Horizontal directions for the fingers to close along (the TCP's y) on an object, best first.
 
     First across the line of sight from the base: a camera on the robot places a thing best across
     that line and worst along it (it sees only its near side), and fingers closing across the line
     of sight forgive an error along it. Then the box's narrower axis, the other, the diagonals.
+
+    Args:
+        size: the object's box (dx, dy, dz).
+        point: its grasp point (world).
+        base_pose: where the base stands.
+
+    Returns:
+        Unit 3-vectors, each followed by its opposite (the hand turned half a turn).
     """
     sight = np.asarray(point[:2], dtype=float) - np.asarray(base_pose[:2], dtype=float)
     sight = sight / np.linalg.norm(sight) if np.linalg.norm(sight) > 1e-6 else np.array([1.0, 0.0])
@@ -215,15 +298,33 @@ def closing_directions(size: np.ndarray, point: np.ndarray, base_pose: Sequence[
 
 
 def across(size: np.ndarray, direction: np.ndarray) -> float:
-    """How wide a box of ``size`` is along the horizontal ``direction``."""
+    """How wide a box is along a horizontal direction, to tell whether it fits between the fingers.
+
+    Args:
+        size: the box (dx, dy, dz).
+        direction: a horizontal unit vector.
+
+    Returns:
+        The box's width along it (m).
+    """
     return float(abs(direction[0]) * size[0] + abs(direction[1]) * size[1])
 
 
-def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Sequence[float], opening: float,
+def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, opening: float,
                   depth: float) -> list[ObjectGrasp]:
-    """Top-down grasps of an object with box ``size`` whose grasp point is ``point``, best first:
-    the fingers around it, ``depth`` below the point, along each of `closing_directions` it fits
-    within ``opening``; where it fits along none, the closed fingertips on its top along each."""
+    """Top-down grasps of an object, best first.
+
+    Args:
+        size: the object's box (dx, dy, dz).
+        point: its grasp point (world, the middle of its top).
+        base_pose: where the base stands.
+        opening: the widest the object may be across the fingers to close around it (m).
+        depth: how far below the point the fingers close around it (m).
+
+    Returns:
+        The fingers around it along each of `closing_directions` it fits within ``opening``;
+        where it fits along none, the closed fingertips on its top along each.
+    """
     directions = closing_directions(size, point, base_pose)
     around = [d for d in directions if across(size, d) <= opening]
     if around:

@@ -10,7 +10,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from skills.arm.plan import SkillPlanError
+from skills.arm.skill_plan import SkillPlanError
 
 #: How far the hand reaches from the TCP across its axis (half its span along the fingers).
 HAND_RADIUS_M = 0.11
@@ -21,19 +21,32 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
               hand_radius_m: float = HAND_RADIUS_M,
               allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed"
               ) -> np.ndarray:
-    """A free place on a surface to put an object of footprint ``radius`` down: RoboEXP's idle space.
+    """A free place on a surface to put an object down: RoboEXP's idle space.
 
-    ``surface_points`` (N, 3): the surface's points (a table's, from the memory); its top is their
-    99th height percentile and only points within 1.5 cm of it count. ``obstacle_points``: every
-    other thing's points, and the object's own (a spot where it stands now is no idle spot). Those
-    standing above the top (by more than 5 mm) must stay ``margin_m`` beyond the object's ``radius``
-    or the hand's reach around its TCP (``hand_radius_m``), whichever is more, away in the plane;
-    the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent. ``allowed``: which of an
-    (N, 2) array of places the caller may use (a boolean mask: within the arm's reach, say, from
-    `reach_along`: the nearest free place to ``near`` may lie at the table's far side, beyond what
-    the arm can carry to); ``allowed_means`` says what it asks, for the error when none is.
-    Returns (x, y, top z) of the candidate on a ``grid_m`` grid nearest to ``near`` (x, y);
-    raises SkillPlanError when there is none.
+    Points standing above the surface's top (by more than 5 mm) must stay ``margin_m`` beyond the
+    object's ``radius`` or the hand's reach around its TCP (``hand_radius_m``), whichever is more,
+    away in the plane; the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+
+    Args:
+        surface_points: (N, 3) the surface's points (a table's, from the memory); its top is their
+            99th height percentile and only points within 1.5 cm of it count.
+        obstacle_points: every other thing's points, and the object's own (a spot where it
+            stands now is no idle spot).
+        radius: the object's footprint radius (m).
+        near: the place (x, y) the spot should be nearest to.
+        margin_m: room kept around the object or the hand.
+        grid_m: the spacing of the candidate places.
+        hand_radius_m: how far the hand reaches from the TCP across its axis.
+        allowed: which of an (N, 2) array of places the caller may use (a boolean mask: within
+            the arm's reach, say, from `reach_along`: the nearest free place to ``near`` may lie at
+            the table's far side, beyond what the arm can carry to); None: all.
+        allowed_means: what ``allowed`` asks, for the error when no place is.
+
+    Returns:
+        (x, y, top z) of the candidate nearest to ``near``.
+
+    Raises:
+        SkillPlanError: the surface is too small or has too few points, or no place is free.
     """
     points = np.asarray(surface_points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) < 10:
@@ -66,10 +79,18 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
 
 
 def reach_along(points_xy: np.ndarray, line_y: float, reach_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """For each (x, y) row of ``points_xy``: the interval [lo, hi] of x on the line y = ``line_y``
-    (the edge of a table the base slides along) from which the point lies within ``reach_m`` of
-    the base's axis; lo > hi where there is none. A pick and its put-down are made from one stand:
-    one where both intervals meet."""
+    """Where along a table's edge the base may stand to reach points: a pick and its put-down are
+    made from one stand, one where both intervals meet.
+
+    Args:
+        points_xy: (N, 2) points (x, y).
+        line_y: the line y = ``line_y`` (the edge of a table the base slides along).
+        reach_m: how far from the base's axis the arm reaches.
+
+    Returns:
+        (lo, hi): for each point, the interval [lo, hi] of x on the line from which it lies within
+        ``reach_m`` of the base's axis; lo > hi where there is none.
+    """
     points = np.atleast_2d(np.asarray(points_xy, dtype=float))
     across = reach_m ** 2 - (points[:, 1] - line_y) ** 2
     half = np.sqrt(np.clip(across, 0.0, None))

@@ -32,8 +32,11 @@ import numpy as np
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry
 from agent.perception.part_motion import part_motion
+from agent.pose import Pose2D
+from skills.arm.frames import base_transform
 from skills.arm.grasps import hand_corners
-from skills.arm.plan import ArmPlanner, SkillPlan, SkillPlanError, base_transform
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlan, SkillPlanError
 
 #: Steps along an opening at which the swept front is checked against the base.
 SWEEP_SAMPLES = 12
@@ -41,14 +44,23 @@ SWEEP_SAMPLES = 12
 
 @dataclass(frozen=True)
 class StandConfig:
-    """``distances_m``: how far out from the handle (along the front's normal) the base may stand;
-    ``hinge_shares``: for doors on a vertical hinge, how far from the handle towards the hinge, as
-    a share of the handle's distance from it (0 is level with the handle; towards the hinge the
-    door's free edge swings past the body sooner); every pair is a candidate, the nearest clear one
-    is taken;
-    ``door_amounts`` / ``drawer_amounts``: openings to plan for, widest first (rad, m);
-    ``margin_m``: room kept between the base's body and the hand or the moving front;
-    ``max_plans``: arm plans tried at most before giving up."""
+    """Where the base may stand to open a part, and how hard to look for such a place.
+
+    Every (hinge share, distance) pair is a candidate; the nearest clear one is taken.
+
+    Args:
+        distances_m: how far out from the handle (along the front's normal) the base may stand.
+        hinge_shares: for doors on a vertical hinge, how far from the handle towards the hinge, as
+            a share of the handle's distance from it (0 is level with the handle; towards the
+            hinge the door's free edge swings past the body sooner).
+        door_amounts: door openings to plan for, widest first (rad).
+        drawer_amounts: drawer openings to plan for, widest first (m).
+        margin_m: room kept between the base's body and the hand or the moving front.
+        max_plans: arm plans tried at most before giving up.
+
+    Raises:
+        ValueError: an empty or out-of-range setting.
+    """
 
     distances_m: tuple[float, ...] = (1.0, 0.9, 0.8, 1.1)
     hinge_shares: tuple[float, ...] = (0.3, 0.6, 0.0)
@@ -69,8 +81,15 @@ class StandConfig:
 
 
 class NoStandError(SkillPlanError):
-    """No candidate stand would do. ``refused`` counts the candidates turned down, by why (those in
-    the way or out of reach once for each opening tried); ``why`` says so in words."""
+    """No candidate stand would do; ``refused`` and ``why`` let the caller try elsewhere or say why.
+
+    Args:
+        kind: the part's kind ("door", "drawer").
+        refused: the candidates turned down, counted by why (those in the way or out of reach
+            once for each opening tried).
+        plans: arm plans tried.
+        max_plans: the most that were allowed.
+    """
 
     def __init__(self, kind: str, refused: Counter[str], plans: int, max_plans: int) -> None:
         self.refused = refused
@@ -81,10 +100,16 @@ class NoStandError(SkillPlanError):
 
 @dataclass(frozen=True)
 class Stand:
-    """A base pose (x, y, yaw) to open a part from, how far to open it (rad or m), and the least
-    distance the hand and the moving front keep from the base's axis over that opening."""
+    """Where to open a part from.
 
-    pose: tuple[float, float, float]
+    Args:
+        pose: the base pose.
+        amount: how far to open the part from there (rad or m).
+        clearance_m: the least distance the hand and the moving front keep from the base's axis
+            over that opening.
+    """
+
+    pose: Pose2D
     amount: float
     clearance_m: float
 
@@ -92,9 +117,23 @@ class Stand:
 def choose_stand(planner: ArmPlanner, q: np.ndarray, geometry: PartGeometry, *,
                  reachable: Callable[[np.ndarray], bool] | None = None, surface_z: float | None = None,
                  config: StandConfig = StandConfig()) -> Stand:
-    """The nearest candidate stand (see the module doc) from which ``geometry`` (as seen closed)
-    opens by the widest of the config's amounts; ``q`` is where the arm is (it starts every plan).
-    Raises `NoStandError` saying how many candidates failed on each count."""
+    """The nearest candidate stand (see the module doc) from which a part opens by the widest of
+    the config's amounts.
+
+    Args:
+        planner: the arm's planner.
+        q: where the arm is (it starts every plan).
+        geometry: the part as seen closed.
+        reachable: whether the base may stand and arrive at an (x, y) (None: everywhere).
+        surface_z: the top of what the part stands on, which the hand keeps above.
+        config: the candidates and limits.
+
+    Returns:
+        The stand, the opening planned from it and its clearance.
+
+    Raises:
+        NoStandError: saying how many candidates failed on each count.
+    """
     needed = planner.body_radius + config.margin_m
     handle = np.asarray(geometry.handle_point[:2], dtype=float)
     poses = [pose for pose in candidate_poses(geometry, config)
@@ -126,9 +165,20 @@ def choose_stand(planner: ArmPlanner, q: np.ndarray, geometry: PartGeometry, *,
     raise NoStandError(geometry.kind, refused, plans, config.max_plans)
 
 
-def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig()) -> list[tuple[float, float, float]]:
-    """Base poses facing the front square on: every (hinge share, distance) pair of the config.
-    Drawers and doors on a horizontal hinge (flaps) are stood before level with the handle."""
+def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig()) -> list[Pose2D]:
+    """Base poses facing a part's front square on, nearest the handle or towards a door's hinge.
+
+    Args:
+        geometry: the part as seen closed.
+        config: the distances and hinge shares.
+
+    Returns:
+        A pose for every (hinge share, distance) pair of the config; drawers and doors on a
+        horizontal hinge (flaps) are stood before level with the handle (share 0 only).
+
+    Raises:
+        SkillPlanError: the part's front normal is vertical.
+    """
     normal = _horizontal(geometry.normal, "the part's front normal")
     yaw = math.atan2(-normal[1], -normal[0])
     handle = np.asarray(geometry.handle_point[:2], dtype=float)
@@ -142,14 +192,23 @@ def candidate_poses(geometry: PartGeometry, config: StandConfig = StandConfig())
     for share in shares:
         for distance in config.distances_m:
             x, y = handle + share * toward_hinge + distance * normal
-            poses.append((float(x), float(y), yaw))
+            poses.append(Pose2D(float(x), float(y), yaw))
     return poses
 
 
 def swept_clearance(geometry: PartGeometry, amount: float, base_xy: np.ndarray) -> float:
-    """The least horizontal distance from ``base_xy`` to what moves while the part opens by
-    ``amount``: the hand on the handle (at its plain grasp, `grasp_pose`) and, for a door, its front
-    from the hinge line to the free edge (`PartGeometry.swing_radius`) at the handle's height."""
+    """How close what moves while a part opens comes to the base, from the geometry alone.
+
+    Args:
+        geometry: the part as seen closed.
+        amount: how far it opens (rad or m).
+        base_xy: the base's axis (world x, y).
+
+    Returns:
+        The least horizontal distance from ``base_xy`` to the hand on the handle (at its plain
+        grasp, `grasp_pose`) and, for a door, its front from the hinge line to the free edge
+        (`PartGeometry.swing_radius`) at the handle's height (m).
+    """
     base = np.asarray(base_xy, dtype=float)[:2]
     grasp = grasp_pose(geometry)
     front = np.zeros((0, 3))
@@ -168,8 +227,17 @@ def swept_clearance(geometry: PartGeometry, amount: float, base_xy: np.ndarray) 
 
 
 def hand_clearance(planner: ArmPlanner, plan: SkillPlan) -> float:
-    """The least horizontal distance from the base's axis to the hand and open fingers over the
-    plan's moves that carry a part (the hand riding the handle round)."""
+    """How close the planned hand comes to the base while it carries the part (the grasp variant
+    planned may tilt the hand).
+
+    Args:
+        planner: the arm's planner.
+        plan: an opening's plan.
+
+    Returns:
+        The least horizontal distance from the base's axis to the hand and open fingers over the
+        plan's moves that carry a part (m).
+    """
     base = base_transform(plan.base_pose)
     least = math.inf
     for step in plan.steps:
@@ -189,15 +257,27 @@ def _horizontal(vector: np.ndarray, what: str) -> np.ndarray:
     return flat / np.linalg.norm(flat)
 
 
-def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
-               door_share: float = 0.35, distance_m: float | None = None) -> tuple[float, float, float]:
+def stand_pose(geometry: PartGeometry, base_pose: Pose2D,
+               door_share: float = 0.35, distance_m: float | None = None) -> Pose2D:
     """Where the base should stand to open or close a part, from where it stands now.
 
     It stays as far from the part's front as it is (slid along the front, never towards it), or
     ``distance_m`` from the handle along the front's normal when given, and turns to face the front
-    square on, with its axis opposite the handle of a drawer, or
-    ``door_share`` of the way from a door's hinge to its handle: there the door, swinging open,
-    passes beside the arm instead of through it, and the handle stays within reach.
+    square on, with its axis opposite the handle of a drawer, or ``door_share`` of the way from a
+    door's hinge to its handle: there the door, swinging open, passes beside the arm instead of
+    through it, and the handle stays within reach.
+
+    Args:
+        geometry: the part.
+        base_pose: where the base stands now.
+        door_share: how far from a door's hinge towards its handle the base's axis aims.
+        distance_m: the distance from the handle along the front's normal (None: as far as now).
+
+    Returns:
+        The base pose.
+
+    Raises:
+        SkillPlanError: the part's front normal is vertical.
     """
     x, y, _ = (float(v) for v in base_pose)
     normal = np.array([geometry.normal[0], geometry.normal[1]], dtype=float)
@@ -213,4 +293,4 @@ def stand_pose(geometry: PartGeometry, base_pose: Sequence[float],
     there = here + along * float((aim - here) @ along)
     if distance_m is not None:
         there = aim + normal * float(distance_m)
-    return float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0])
+    return Pose2D(float(there[0]), float(there[1]), math.atan2(-normal[1], -normal[0]))

@@ -26,7 +26,16 @@ from ruckig import InputParameter, Result, Ruckig, RuckigError, Synchronization,
 
 @dataclass(frozen=True)
 class JointLimits:
-    """Per-joint maximum |velocity|, |acceleration| and |jerk| (rad or m, per s, s², s³)."""
+    """The limits a trajectory keeps to, joint by joint.
+
+    Args:
+        velocity: per-joint maximum |velocity| (rad or m per s).
+        acceleration: maximum |acceleration| (per s²).
+        jerk: maximum |jerk| (per s³).
+
+    Raises:
+        ValueError: an empty or non-positive limit, or lengths that differ.
+    """
 
     velocity: np.ndarray
     acceleration: np.ndarray
@@ -49,10 +58,22 @@ class JointLimits:
 
     @classmethod
     def uniform(cls, dof: int, velocity: float, acceleration: float, jerk: float) -> JointLimits:
+        """The same limits for every joint.
+
+        Args:
+            dof: the number of joints.
+            velocity: the maximum |velocity|.
+            acceleration: the maximum |acceleration|.
+            jerk: the maximum |jerk|.
+
+        Returns:
+            The limits.
+        """
         return cls(np.full(dof, velocity), np.full(dof, acceleration), np.full(dof, jerk))
 
     @property
     def dof(self) -> int:
+        """The number of joints."""
         return len(self.velocity)
 
 
@@ -61,22 +82,40 @@ class JointTrajectory:
     """A trajectory sampled every ``dt`` from 0 until the first sample at or after ``duration``.
 
     Samples after the end hold the last waypoint at rest, so the sample period stays uniform.
-    ``waypoint_times`` are when the trajectory passes each waypoint; `at` evaluates any time.
+
+    Args:
+        times: (m,) the sample times.
+        positions: (m, dof) the joint positions at them.
+        velocities: (m, dof) the velocities.
+        accelerations: (m, dof) the accelerations.
+        duration: when the motion ends (s).
+        dt: the sample period (s).
+        waypoints: (n, dof) the waypoints passed through.
+        waypoint_times: (n,) when the trajectory passes each.
+        waypoint_velocities: (n, dof) the passing velocities chosen.
+        _chain: the segments, which `at` evaluates at any time.
     """
 
-    times: np.ndarray  # (m,)
-    positions: np.ndarray  # (m, dof)
-    velocities: np.ndarray  # (m, dof)
-    accelerations: np.ndarray  # (m, dof)
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
     duration: float
     dt: float
-    waypoints: np.ndarray  # (n, dof)
-    waypoint_times: np.ndarray  # (n,)
-    waypoint_velocities: np.ndarray  # (n, dof): the passing velocities chosen
+    waypoints: np.ndarray
+    waypoint_times: np.ndarray
+    waypoint_velocities: np.ndarray
     _chain: _Chain = field(repr=False, compare=False)
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Position, velocity and acceleration at time ``t`` (clamped to [0, duration])."""
+        """The state at any time, between samples too.
+
+        Args:
+            t: the time (s), clamped to [0, duration].
+
+        Returns:
+            (position, velocity, acceleration), each (dof,).
+        """
         return self._chain.state(t)
 
 
@@ -126,10 +165,21 @@ class _Chain:
 
 def plan_trajectory(waypoints: np.ndarray, limits: JointLimits, dt: float,
                     pass_through: bool = True) -> JointTrajectory:
-    """The jerk-limited trajectory through ``waypoints`` (n, dof), starting and ending at rest.
+    """The jerk-limited trajectory through waypoints, starting and ending at rest.
 
-    With ``pass_through`` false the arm stops at every waypoint. Raises ValueError for bad input and
-    RuntimeError if Ruckig finds no trajectory.
+    Args:
+        waypoints: (n, dof) joint waypoints.
+        limits: the joints' limits.
+        dt: the sample period (s).
+        pass_through: pass intermediate waypoints at speed (see the module doc); False: stop at
+            every waypoint.
+
+    Returns:
+        The sampled trajectory.
+
+    Raises:
+        ValueError: bad input.
+        RuntimeError: Ruckig finds no trajectory.
     """
     points = np.array(waypoints, dtype=float)
     if points.ndim != 2 or len(points) == 0:

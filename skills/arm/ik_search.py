@@ -1,0 +1,184 @@
+"""IK for planning: world targets solved from a few structured seeds, then random restarts drawn
+from one seeded generator per plan, and Cartesian paths in the world frame; the time and the
+number of solves are counted for the plan's report.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator, Sequence
+from typing import Any
+
+import numpy as np
+
+from agent.pose import Pose2D
+from skills.arm.arm_model import ArmModel
+from skills.arm.frames import base_transform
+from skills.arm.ik_descent import IKMode
+from skills.arm.kinematics import ArmKinematics
+from skills.arm.skill_plan import SkillPlanError
+from skills.arm.tcp_paths import line_poses
+
+#: IK seeds reaching ahead with the hand level: fingers above each other (a level bar) or side by side.
+_AHEAD = ((0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, -0.785), (0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, 0.785))
+#: Cartesian step of approaches, pulls and carries (m).
+LINE_STEP_M = 0.01
+
+
+class IKSearch:
+    """The IK of one plan: world targets taken into the robot's frame, solved reproducibly.
+
+    Args:
+        arm: the arm planned for.
+        here: where the arm is when planning starts (clipped into the limits): the last seed.
+        base_pose: where the base stands.
+    """
+
+    def __init__(self, arm: ArmModel, here: np.ndarray, base_pose: Pose2D) -> None:
+        self.arm = arm
+        self.here = here
+        self.base = base_transform(base_pose)
+        self.to_base = np.linalg.inv(self.base)
+        self.rng = np.random.default_rng(arm.seed)
+        #: IK time (s) and solves so far, for the plan's report.
+        self.seconds = 0.0
+        self.solves = 0
+
+    def seeds(self, first: np.ndarray | None, target_local: np.ndarray) -> list[np.ndarray]:
+        """IK seeds close to the target's posture, which keep IK off contorted solutions.
+
+        Args:
+            first: the previous waypoint of a chain, tried first; None for none.
+            target_local: the target's 4×4 pose in the robot's frame.
+
+        Returns:
+            ``first`` if given, then the ready pose and postures reaching ahead, each turned
+            (joint 1) towards the target and as they are, then where the arm is.
+        """
+        ready = self.arm.ready
+        shoulder = ready.copy()
+        toward = math.atan2(target_local[1, 3], target_local[0, 3] - 0.08)  # panda_link0 is 8 cm ahead
+        postures = [ready, *(np.array(seed) for seed in _AHEAD)]
+        turned = []
+        for posture in postures:
+            seed = posture.copy()
+            seed[1] = shoulder[1] + toward
+            turned.append(seed)
+        seeds = [*turned, *postures, self.here]
+        return [first, *seeds] if first is not None else seeds
+
+    def ik(self, pose_world: np.ndarray, what: str, seed: np.ndarray | None = None, mode: IKMode = "pose",
+           kinematics: ArmKinematics | None = None) -> np.ndarray:
+        """One configuration reaching a world pose: the first of `solutions`.
+
+        Args:
+            pose_world: the frame's 4×4 target (world).
+            what: the target in words, for the error.
+            seed: tried before the other seeds.
+            mode: what must match.
+            kinematics: the frame's kinematics (default: the TCP's).
+
+        Returns:
+            The joint positions.
+
+        Raises:
+            SkillPlanError: no seed and no restart reaches it.
+        """
+        for q in self.solutions(pose_world, what, seed, mode, kinematics):
+            return q
+        raise AssertionError("solutions() raises when it finds none")
+
+    def solutions(self, pose_world: np.ndarray, what: str, seed: np.ndarray | None = None, mode: IKMode = "pose",
+                  kinematics: ArmKinematics | None = None, restarts: int = 10) -> Iterator[np.ndarray]:
+        """Distinct configurations reaching a world pose, so that a chain can try the arm's postures in turn.
+
+        Args:
+            pose_world: the frame's 4×4 target (world).
+            what: the target in words, for the error.
+            seed: tried before the other seeds (`seeds`).
+            mode: what must match.
+            kinematics: the frame's kinematics (default: the TCP's).
+            restarts: random configurations tried after the seeds, drawn from the plan's generator.
+
+        Yields:
+            One configuration per seed or restart that converges to a posture not found yet.
+
+        Raises:
+            SkillPlanError: naming ``what``, when there is none at all.
+        """
+        kin = kinematics or self.arm.kin
+        target = self.to_base @ pose_world
+        found: list[np.ndarray] = []
+        reason = ""
+        starts = [*self.seeds(seed, target), *(kin.random_configuration(self.rng) for _ in range(restarts))]
+        for start in starts:
+            began = time.perf_counter()
+            result = kin.solve_ik(target, kin.clip(start), self.rng, mode=mode, max_restarts=0)
+            self.seconds += time.perf_counter() - began
+            self.solves += 1
+            if not result.success:
+                reason = reason or result.reason
+                continue
+            if all(np.abs(result.q - other).max() > 0.3 for other in found):
+                found.append(result.q)
+                yield result.q
+        if not found:
+            raise SkillPlanError(f"IK: {what} unreachable: {reason}")
+
+    def path(self, start_q: np.ndarray, poses_world: Sequence[np.ndarray], what: str) -> np.ndarray:
+        """Joint waypoints taking the TCP through world poses in turn.
+
+        Args:
+            start_q: where the path starts.
+            poses_world: the TCP's 4×4 poses (world), close together.
+            what: the path in words, for the error.
+
+        Returns:
+            (k, dof) waypoints, ``start_q`` first.
+
+        Raises:
+            SkillPlanError: a pose is unreachable or needs a jump.
+        """
+        kin = self.arm.kin
+        began = time.perf_counter()
+        result = kin.plan_cartesian_path(start_q, [self.to_base @ pose for pose in poses_world], max_joint_jump=0.35,
+                                         max_deviation=0.004)
+        self.seconds += time.perf_counter() - began
+        self.solves += len(poses_world)
+        if not result.success:
+            raise SkillPlanError(f"IK: {what} unreachable: {result.reason}")
+        return result.q
+
+    def chain(self, stages: list[tuple[str, str, Any]]) -> list[np.ndarray]:
+        """Joint waypoints for stages run one after the other from where the arm is.
+
+        Args:
+            stages: (what, kind, target) each: kind "free" an IK solution for the pose ``target``
+                (a one-row array), "line" a straight TCP line from the previous stage's pose to
+                ``target``, "path" the TCP through the poses ``target``.
+
+        Returns:
+            Each stage's waypoints, in order.
+
+        Raises:
+            SkillPlanError: naming the first stage that cannot be reached.
+        """
+        kin = self.arm.kin
+        chains: list[np.ndarray] = []
+        q = self.here
+        pose = None
+        for what, kind, target in stages:
+            if kind == "free":
+                q = self.ik(target, what, seed=None if pose is None else q)
+                chains.append(q[None, :])
+                pose = target
+            elif kind == "line":
+                assert pose is not None
+                current = self.base @ kin.forward(q)
+                chains.append(self.path(q, line_poses(current, target, LINE_STEP_M), what))
+                q, pose = chains[-1][-1], target
+            else:
+                chains.append(self.path(q, list(target), what))
+                q, pose = chains[-1][-1], target[-1]
+        return chains

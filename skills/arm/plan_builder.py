@@ -1,0 +1,230 @@
+"""Accumulating a plan's steps: moves timed with Ruckig from wherever the previous step left the
+arm, gripper actions, and free joint-space moves that keep the hand above a surface.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from agent.pose import Pose2D
+from skills.arm.arm_model import ArmModel
+from skills.arm.frames import base_transform
+from skills.arm.grasps import HandleGrasp, ObjectGrasp, hand_bottom
+from skills.arm.ik_search import IKSearch
+from skills.arm.skill_plan import PartMotion, SkillPlan, SkillPlanError, Step
+
+#: How far above ``surface_z`` the hand keeps.
+SURFACE_CLEARANCE_M = 0.01
+#: How far a free move tries raising the lift to swing the arm over a surface, least first (m).
+LIFT_RISES_M = (0.15, 0.3, 0.45)
+#: An arm within this (rad or m, any joint) of its stowed or ready pose folds without backing off first.
+FOLDED_RAD = 0.1
+
+
+class PlanBuilder:
+    """The steps of one plan, from a start configuration; each move starts where the plan has the arm.
+
+    Args:
+        arm: the arm planned for.
+        start: where the arm starts (`ArmModel.start_configuration`).
+        base_pose: where the base stands.
+        surface_z: the top of the surface the hand works over (world z), which free moves keep
+            the hand above; None for none.
+    """
+
+    def __init__(self, arm: ArmModel, start: np.ndarray, base_pose: Pose2D, surface_z: float | None = None) -> None:
+        self.arm = arm
+        self.surface_z = surface_z
+        self.start = start
+        #: Where the plan has the arm: the end of the last move.
+        self.q = start.copy()
+        self.base_pose = Pose2D.of(base_pose)
+        self.base = base_transform(self.base_pose)
+        self.steps: list[Step] = []
+        self.began = time.perf_counter()
+        self.trajectory_s = 0.0
+
+    def step(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
+             touch: str | None = None) -> Step:
+        """A move from where the plan has the arm, not yet added to the plan.
+
+        Args:
+            name: what the move does.
+            waypoints: (n, dof) joint waypoints; where the plan has the arm is put first if missing.
+            careful: at the careful speed (near or holding things), else the free speed.
+            stop_on_contact: the move stops on the first contact.
+            tcp_target: where it ends the TCP (world).
+            part_motion: what it does to a held part.
+            touch: what a touch grasp's approach touches.
+
+        Returns:
+            The timed move.
+
+        Raises:
+            SkillPlanError: Ruckig finds no trajectory.
+        """
+        arm = self.arm
+        speed = arm.careful_speed if careful else arm.free_speed
+        waypoints = np.asarray(waypoints, dtype=float)
+        if len(waypoints) and np.abs(waypoints[0] - self.q).max() > 1e-9:
+            waypoints = np.vstack([self.q[None, :], waypoints])
+        waypoints = arm.kin.clip(waypoints)
+        began = time.perf_counter()
+        try:
+            samples = arm.samples(waypoints, speed)
+        except (RuntimeError, ValueError) as error:
+            raise SkillPlanError(f"trajectory: {name}: {error}") from None
+        self.trajectory_s += time.perf_counter() - began
+        return Step("move", name, samples, arm.dt, waypoints, speed, stop_on_contact, tcp_target, part_motion,
+                    touch=touch)
+
+    def move(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
+             tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
+             touch: str | None = None) -> None:
+        """Add a move; the plan then has the arm at its last waypoint.
+
+        Args:
+            name: what the move does.
+            waypoints: (n, dof) joint waypoints (see `step`).
+            careful: at the careful speed, else the free speed.
+            stop_on_contact: the move stops on the first contact.
+            tcp_target: where it ends the TCP (world).
+            part_motion: what it does to a held part.
+            touch: what a touch grasp's approach touches.
+
+        Raises:
+            SkillPlanError: Ruckig finds no trajectory.
+        """
+        self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion, touch))
+        self.q = self.steps[-1].waypoints[-1].copy()
+
+    def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True) -> None:
+        """Add a joint-space move to ``goal`` that stops on contact.
+
+        It goes by way of the ready pose when the arm starts or ends stowed (the way out of the
+        base and back into it that every skill takes, so folding away from a view into a drawer
+        retraces the way there instead of sweeping through the drawer). With a known surface the
+        hand must stay `SURFACE_CLEARANCE_M` above it all the way; a straight joint-space move that
+        dips lower is replaced by one with the lift raised on the way (the arm swings over, then the
+        lift lets it down): by `LIFT_RISES_M` in turn, as little as clears the surface (the lift is
+        the slowest joint).
+
+        Args:
+            name: what the move does.
+            goal: the joint positions to end at.
+            via_ready: go by way of the ready pose into and out of the stowed pose.
+
+        Raises:
+            SkillPlanError: even the top of the lift's travel dips too low, or no trajectory.
+        """
+        arm = self.arm
+        goal = np.asarray(goal, dtype=float)
+        start = [self.q]
+        stowed = arm.stowed is not None and np.abs(self.q - arm.stowed).max() < FOLDED_RAD
+        if via_ready and stowed:
+            start.append(arm.ready)
+        end = [goal]
+        if via_ready and arm.stowed is not None and np.abs(goal - arm.stowed).max() < FOLDED_RAD and not stowed:
+            end.insert(0, arm.ready)
+        routes = [np.array([*start, *end])]
+        lift = arm.lift_index
+        if self.surface_z is not None and lift is not None:
+            top = arm.kin.upper[lift]
+            low_lift = max(start[-1][lift], end[0][lift])
+            for rise in (*(r for r in LIFT_RISES_M if low_lift + r < top), math.inf):
+                over = [start[-1].copy(), end[0].copy()]
+                for q in over:
+                    q[lift] = min(top, low_lift + rise)
+                routes.append(np.array([*start, *over, *end]))
+        target = self.base @ arm.kin.forward(goal)
+        low = math.inf
+        for waypoints in routes:
+            step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
+            low = self.lowest(step)
+            if self.surface_z is None or low >= self.surface_z + SURFACE_CLEARANCE_M:
+                self.steps.append(step)
+                self.q = goal.copy()
+                return
+        raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
+                             f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
+                             f"at {self.surface_z:.3f} m, even with the lift up")
+
+    def lowest(self, step: Step) -> float:
+        """How low the hand comes over a move, to keep it above a surface.
+
+        Args:
+            step: a move.
+
+        Returns:
+            The lowest world z of the hand (`skills.arm.grasps.hand_bottom`) over every third
+            sample and the last, away from the base's body.
+        """
+        assert step.samples is not None
+        kin = self.arm.kin
+        picks = np.unique(np.r_[np.arange(0, len(step.samples), 3), len(step.samples) - 1])
+        return min(hand_bottom(self.base @ kin.forward(step.samples[k]), self.base, self.arm.body_radius)
+                   for k in picks)
+
+    def gripper(self, action: str, name: str, expect_held: str | None = None) -> None:
+        """Add a gripper action.
+
+        Args:
+            action: "open" or "close".
+            name: what it does.
+            expect_held: closing, what must then be held ("handle", "object"; None: nothing).
+        """
+        self.steps.append(Step("gripper", name, action=action, expect_held=expect_held))
+
+    def grasp(self, way: HandleGrasp | ObjectGrasp, name: str, approach: np.ndarray, pose: np.ndarray, kind: str,
+              what: str | None = None) -> None:
+        """Add the approach to a grasp and the close on what it holds.
+
+        The fingers close around the thing, or, for a touch grasp, close first and the approach
+        ends where their tips touch it. A touch grasp's approach ends past the grasp
+        (`skills.arm.grasp_lines.searched`), so the next move comes back to it; the executor
+        re-times that move from wherever the touch stopped the arm.
+
+        Args:
+            way: the grasp.
+            name: what the approach does.
+            approach: its joint waypoints.
+            pose: the grasp's TCP pose (world).
+            kind: "handle" or "object".
+            what: the thing held in words (default: ``kind``).
+        """
+        if way.touch:
+            self.gripper("close", "close the fingers")
+        self.move(name, approach, careful=True, stop_on_contact=True, tcp_target=pose,
+                  touch=kind if way.touch else None)
+        self.gripper("close", f"grasp the {what or kind}", expect_held=kind)
+
+    def let_go(self, what: str, retreat: np.ndarray) -> None:
+        """Add opening the hand on a thing and backing off it, as every part skill ends.
+
+        Args:
+            what: the thing in words.
+            retreat: the back-off's joint waypoints.
+        """
+        self.gripper("open", f"let go of the {what}")
+        self.move(f"back off the {what}", retreat, careful=True, tcp_target=self.base @ self.arm.kin.forward(retreat[-1]))
+
+    def finish(self, skill: str, info: dict[str, Any], ik: IKSearch | None = None) -> SkillPlan:
+        """The plan made of the steps added.
+
+        Args:
+            skill: the primitive's name.
+            info: what the skill reports afterwards.
+            ik: the plan's IK, for its cost; None when the plan solved none.
+
+        Returns:
+            The plan, ending where the last move left the arm.
+        """
+        planning_ms = 1e3 * (time.perf_counter() - self.began)
+        ik_s, solves = (0.0, 0) if ik is None else (ik.seconds, ik.solves)
+        return SkillPlan(skill, tuple(self.steps), self.base_pose, self.start, self.q.copy(), 1e3 * ik_s,
+                         solves, 1e3 * self.trajectory_s, planning_ms, info)
