@@ -16,7 +16,7 @@ from worlds.vocabulary import LETTERS
 class ShouldStop(py_trees.behaviour.Behaviour):
     """SUCCESS once the step budget is spent or no frontier is left; FAILURE while exploring."""
 
-    def __init__(self, name: str = "BudgetSpent") -> None:
+    def __init__(self, name: str = "ShouldStop") -> None:
         super().__init__(name)
         self.blackboard = self.attach_blackboard_client(name=name)
         for key in (bb.BUDGET, bb.ANSWER_LOG, bb.EXPLORATION_COMPLETE):

@@ -30,19 +30,19 @@ is nowhere to go, so the step explores on.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
-
 import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.episode_state import ActRecord, ApproachState, PieceProgress
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.mapping.occupancy import ExplorationMap
 from agent.observation import Observation
 from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.perception.sightings import SightingConfig, Sightings, storage_centres
-from agent.planning.explore import ExploreConfig
+from agent.planning.map_fields import MapFields
+from agent.planning.frontier_plan import ExploreConfig
 from agent.planning.room_goal import RoomFloors, room_entry, room_of_piece
 from agent.planning.route import Routes, routes_from, step_towards
 from agent.planning.viewpoint import ViewpointConfig, choose_viewpoint
@@ -85,15 +85,10 @@ class ApproachConfig:
             raise ValueError(f"act.approach.squeeze_m: {self.squeeze_m} must lie in [0, {MAX_SQUEEZE_M}]")
 
 
-@dataclass
-class _Progress:
-    tried: list[float] = field(default_factory=list)  # bearings of the viewpoints driven to
-    moves: int = 0
-
-
 class ApproachStorage(py_trees.behaviour.Behaviour):
     """Writes a `MovePlan` towards the named storage (a view of a piece seen, else its room) and
-    succeeds, or fails when there is nowhere to go (see the module docstring)."""
+    succeeds, or fails when there is nowhere to go (see the module docstring). What it has seen
+    and tried over the episode is the blackboard's ``approach_state``."""
 
     def __init__(self, config: ApproachConfig = ApproachConfig(), explore: ExploreConfig = ExploreConfig(),
                  name: str = "ApproachStorage") -> None:
@@ -103,13 +98,8 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         self.blackboard = self.attach_blackboard_client(name=name)
         for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ACTS):
             self.blackboard.register_key(key, access=Access.READ)
-        self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
-        self.sightings = Sightings(config.sightings)
-        self.progress: list[_Progress] = []  # by index into self.sightings.pieces
-        self.floors: RoomFloors | None = None
-        self.room_moves = 0
-        self.entered = False
-        self._seen: Observation | None = None
+        for key in (bb.PLAN, bb.MAP_FIELDS, bb.APPROACH_STATE):
+            self.blackboard.register_key(key, access=Access.WRITE)
 
     def update(self) -> Status:
         question = self.blackboard.get(bb.QUESTION)
@@ -120,39 +110,48 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         room = room_in_question(question)
         world_map: ExplorationMap = self.blackboard.get(bb.MAP)
         observation: Observation = self.blackboard.get(bb.OBSERVATION)
-        if self.floors is None:
-            self.floors = RoomFloors(world_map.spec)
-        if observation is not self._seen:
-            self._seen = observation
-            self._note(observation, kind, room, self.floors)
-        routes = routes_from(world_map, np.asarray(observation.base_pose[:2]), self.explore, self.config.squeeze_m)
-        if self._to_piece(kind, room, routes, world_map, self.floors) or self._to_room(room, routes, self.floors):
+        state: ApproachState = self.blackboard.get(bb.APPROACH_STATE)
+        if state.floors is None:
+            state.floors = RoomFloors(world_map.spec)
+        if observation is not state.seen:
+            state.seen = observation
+            self._note(state, observation, kind, room)
+        fields: MapFields = self.blackboard.get(bb.MAP_FIELDS)
+        routes = routes_from(world_map, np.asarray(observation.base_pose[:2]), self.explore, self.config.squeeze_m,
+                             fields)
+        if self._to_piece(state, kind, room, routes, world_map) or self._to_room(state, room, routes):
             return Status.SUCCESS
         return Status.FAILURE
 
-    def _note(self, observation: Observation, kind: str, room: str | None, floors: RoomFloors) -> None:
+    def _note(self, state: ApproachState, observation: Observation, kind: str, room: str | None) -> None:
         """What this frame shows of the named storage and room; whether the robot stands in the room."""
-        self.sightings.add(storage_centres(observation, kind, self.config.sightings))
-        self.progress += [_Progress() for _ in range(len(self.sightings.pieces) - len(self.progress))]
+        if state.sightings is None:
+            state.sightings = Sightings(self.config.sightings)
+        state.sightings.add(storage_centres(observation, kind, self.config.sightings))
+        state.progress += [PieceProgress() for _ in range(len(state.sightings.pieces) - len(state.progress))]
+        floors = state.floors
+        assert floors is not None  # made before the first frame is noted
         for floor_kind, points in floor_points_by_kind(observation, read_rooms(observation),
                                                        self.config.sightings.max_depth_m).items():
             floors.add(floor_kind, points)
         if room is not None:
             named = floors.of(room_kind(room))
-            self.entered |= named.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
+            state.entered |= named.contains(np.asarray(observation.base_pose[:2]), self.config.entered_m)
 
-    def _to_piece(self, kind: str, room: str | None, routes: Routes, world_map: ExplorationMap,
-                  floors: RoomFloors) -> bool:
+    def _to_piece(self, state: ApproachState, kind: str, room: str | None, routes: Routes,
+                  world_map: ExplorationMap) -> bool:
         """Plan the move towards a view of the nearest piece still to be looked at, seen in the
         named room or in a room nothing told, those in the named room first; whether it did."""
-        acts = self.blackboard.get(bb.ACTS) if self.blackboard.exists(bb.ACTS) else []
+        acts: list[ActRecord] = self.blackboard.get(bb.ACTS)
         named = None if room is None else room_kind(room)
+        sightings, floors = state.sightings, state.floors
+        assert sightings is not None and floors is not None  # made when the first frame was noted
         choices = []
-        for index, piece in enumerate(self.sightings.pieces):
+        for index, piece in enumerate(sightings.pieces):
             seen_in = room_of_piece(piece.room, floors, np.asarray(piece.xy), self.config.room_floor_m)
-            if self._dealt_with(index, acts) or seen_in not in (None, named):
+            if self._dealt_with(state, index, acts) or seen_in not in (None, named):
                 continue
-            viewpoint = choose_viewpoint(routes, world_map.occupied, piece.xy, self.progress[index].tried,
+            viewpoint = choose_viewpoint(routes, world_map.occupied, piece.xy, state.progress[index].tried,
                                          self.config.viewpoint)
             if viewpoint is not None:
                 choices.append((seen_in != named, viewpoint.path_m, index, viewpoint))
@@ -161,24 +160,25 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
             return False
         _, _, index, viewpoint = min(choices, key=lambda c: c[:3])
         plan, arrives = step_towards(routes, viewpoint.xy, viewpoint.yaw, self.explore.max_step_m)
-        progress = self.progress[index]
+        progress = state.progress[index]
         progress.moves += 1
         if arrives:
             progress.tried.append(viewpoint.bearing)
         self.blackboard.set(bb.PLAN, plan)
-        x, y = self.sightings.pieces[index].xy
+        x, y = sightings.pieces[index].xy
         self.feedback_message = (f"towards a view of the {kind} at ({x:.1f}, {y:.1f}), "
                                  f"{viewpoint.path_m:.1f} m away{'' if arrives else ' (part of the way)'}")
         return True
 
-    def _to_room(self, room: str | None, routes: Routes, floors: RoomFloors) -> bool:
+    def _to_room(self, state: ApproachState, room: str | None, routes: Routes) -> bool:
         """Plan the move into the named room, seen but not stood in yet; whether it did."""
         if room is None:
             return False
-        if self.entered or self.room_moves >= self.config.max_moves:
-            self.feedback_message += f"; {'has been in' if self.entered else 'gave up going into'} the {room}"
+        if state.entered or state.room_moves >= self.config.max_moves:
+            self.feedback_message += f"; {'has been in' if state.entered else 'gave up going into'} the {room}"
             return False
-        goal = room_entry(routes, floors.of(room_kind(room)))
+        assert state.floors is not None  # made when the first frame was noted
+        goal = room_entry(routes, state.floors.of(room_kind(room)))
         if goal is None:
             self.feedback_message += f"; no way into the {room} seen yet"
             return False
@@ -186,15 +186,17 @@ class ApproachStorage(py_trees.behaviour.Behaviour):
         if plan.goal_distance_m < self.explore.min_frontier_distance_m:
             self.feedback_message += f"; as near the {room} as the map lets it come"
             return False
-        self.room_moves += 1
+        state.room_moves += 1
         self.blackboard.set(bb.PLAN, plan)
         self.feedback_message = f"into the {room}, towards ({goal[0]:.1f}, {goal[1]:.1f}), {plan.goal_distance_m:.1f} m away"
         return True
 
-    def _dealt_with(self, index: int, acts: list[dict[str, Any]]) -> bool:
-        progress = self.progress[index]
+    def _dealt_with(self, state: ApproachState, index: int, acts: list[ActRecord]) -> bool:
+        """Whether piece ``index`` was looked at from enough sides, approached often enough, or
+        tried by the act branch."""
+        progress = state.progress[index]
         if len(progress.tried) >= self.config.views or progress.moves >= self.config.max_moves:
             return True
-        xy = self.sightings.pieces[index].xy
-        return any("piece_xy" in act and float(np.linalg.norm(np.asarray(act["piece_xy"]) - xy)) <= self.config.done_m
-                   for act in acts)
+        assert state.sightings is not None
+        xy = state.sightings.pieces[index].xy
+        return any(float(np.linalg.norm(np.asarray(act.piece_xy) - xy)) <= self.config.done_m for act in acts)

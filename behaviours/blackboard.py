@@ -1,20 +1,150 @@
-"""Names of the blackboard keys the EQA tree shares, in one place so behaviours agree on them."""
+"""The EQA tree's blackboard contract: every key, its type, who writes and who reads it, and how an
+episode's board starts, declared in one place so that behaviours and the runtime agree on it.
 
-QUESTION = "question"  # str
-CHOICES = "choices"  # list[str], four of them, padded
-BUDGET = "budget"  # int, steps
-OBSERVATION = "observation"  # agent.observation.Observation, the newest frame
-INSIDE_VIEW = "inside_view"  # agent.observation.Observation, what the VLM is shown of storage just opened
-MAP = "map"  # agent.mapping.occupancy.ExplorationMap
-ANSWER_LOG = "answer_log"  # agent.eqa.answers.AnswerLog
-PLAN = "plan"  # agent.planning.explore.MovePlan, the next move
-FRONTIER_GOAL = "frontier_goal"  # numpy (x, y) of the frontier the robot heads for, or None
-TRAJECTORY = "trajectory"  # list[tuple[float, float, float]], base poses along the route driven (corners, ends)
-EXPLORATION_COMPLETE = "exploration_complete"  # bool, no reachable frontier is left
-ANSWER = "answer"  # dict, written once when the episode answers
-SEMANTIC_MAP = "semantic_map"  # agent.mapping.semantic_map.SemanticMap, semantic methods only
-STOP_DECISION = "stop_decision"  # agent.eqa.stopping.StopDecision once the stopping rule decides, else None
-PREDICTION_SET = "prediction_set"  # list[str], the running conformal set (cp rule only, else None)
-Q_HAT = "q_hat"  # float, the calibrated conformal threshold q̂ (cp rule only, else None)
-EPSILON = "epsilon"  # float, the miscoverage ε the user accepts (cp rule only, else None)
-ACTS = "acts"  # list[dict], every time the robot opened (or tried to open) storage to look inside
+Leaves register each key with the access they use: a leaf that changes an object on the board in
+place (fuses a frame into the map, appends to the trajectory) registers WRITE, as a leaf that sets
+the key does. `seed_board` puts the initial values of one episode on the board.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import py_trees
+from py_trees.common import Access
+
+from agent.eqa.answers import AnswerLog
+from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
+from agent.mapping.semantic_map import SemanticValueConfig
+from agent.planning.explore_method import ExploreStrategy
+from agent.planning.map_fields import MapFields
+from behaviours.episode_state import ApproachState, LookInsideState
+
+QUESTION = "question"
+CHOICES = "choices"
+BUDGET = "budget"
+OBSERVATION = "observation"
+INSIDE_VIEW = "inside_view"
+MAP = "map"
+MAP_FIELDS = "map_fields"
+ANSWER_LOG = "answer_log"
+PLAN = "plan"
+FRONTIER_GOAL = "frontier_goal"
+TRAJECTORY = "trajectory"
+EXPLORATION_COMPLETE = "exploration_complete"
+ANSWER = "answer"
+SEMANTIC_MAP = "semantic_map"
+STOP_DECISION = "stop_decision"
+PREDICTION_SET = "prediction_set"
+Q_HAT = "q_hat"
+EPSILON = "epsilon"
+ACTS = "acts"
+APPROACH_STATE = "approach_state"
+LOOK_INSIDE_STATE = "look_inside_state"
+
+
+@dataclass(frozen=True)
+class KeySpec:
+    """One key of the contract: what it holds, who writes it, who reads it, and its start."""
+
+    type: str
+    writers: tuple[str, ...]
+    readers: tuple[str, ...]
+    initial: str  # how `seed_board` fills it; "" for keys a leaf writes first
+
+
+#: The EQA tree's keys. Writers include leaves that change the object in place.
+CONTRACT: dict[str, KeySpec] = {
+    QUESTION: KeySpec("str", ("EpisodeSetup",), ("QueryVLM", "QueryDirections", "ApproachStorage", "LookInside"),
+                      "the scenario's question"),
+    CHOICES: KeySpec("list[str], four, padded", ("EpisodeSetup",), ("QueryVLM", "Answer", "AnswerFallback"),
+                     "the scenario's choices"),
+    BUDGET: KeySpec("int, steps", ("EpisodeSetup",), ("ShouldStop", "SelectFrontier"), "episode.budget or the scenario's"),
+    OBSERVATION: KeySpec("agent.observation.Observation, the newest frame", ("Observe", "LookInside"),
+                         ("IntegrateMap", "QueryVLM", "QueryDirections", "ApproachStorage", "SelectFrontier",
+                          "LookInside"), ""),
+    INSIDE_VIEW: KeySpec("agent.observation.Observation, the views into storage just opened", ("LookInside",),
+                         ("QueryVLM inside",), ""),
+    MAP: KeySpec("agent.mapping.occupancy.ExplorationMap", ("EpisodeSetup", "IntegrateMap", "Navigate"),
+                 ("QueryDirections", "ApproachStorage", "SelectFrontier", "LookInside"), "empty, laid round the start"),
+    MAP_FIELDS: KeySpec("agent.planning.map_fields.MapFields, the map's clearance and drive fields",
+                        ("EpisodeSetup", "ApproachStorage", "SelectFrontier", "LookInside"),
+                        ("ApproachStorage", "SelectFrontier", "LookInside"), "empty"),
+    ANSWER_LOG: KeySpec("agent.eqa.answers.AnswerLog", ("EpisodeSetup", "QueryVLM"),
+                        ("UpdatePredictionSet", "ShouldStop", "Answer", "AnswerFallback", "SelectFrontier",
+                         "QueryDirections", "LookInside"), "empty"),
+    PLAN: KeySpec("agent.planning.frontier_plan.MovePlan or None, the next move",
+                  ("EpisodeSetup", "ApproachStorage", "SelectFrontier"), ("MarkExplorationComplete", "Navigate"), "None"),
+    FRONTIER_GOAL: KeySpec("numpy (x, y) of the frontier headed for, or None", ("EpisodeSetup", "SelectFrontier",
+                           "Navigate"), ("SelectFrontier",), "None"),
+    TRAJECTORY: KeySpec("list[tuple[float, float, float]], base poses along the route driven",
+                        ("EpisodeSetup", "Navigate", "LookInside"), ("EpisodeSetup",), "[start pose]"),
+    EXPLORATION_COMPLETE: KeySpec("bool, no reachable frontier is left", ("EpisodeSetup", "MarkExplorationComplete"),
+                                  ("ShouldStop", "Answer", "AnswerFallback"), "False"),
+    ANSWER: KeySpec("dict, written once when the episode answers", ("Answer", "AnswerFallback"), ("EpisodeRunner",), ""),
+    SEMANTIC_MAP: KeySpec("agent.mapping.semantic_map.SemanticMap (semantic methods only)",
+                          ("EpisodeSetup", "QueryDirections"), ("SelectFrontier",), "empty, at the method's default"),
+    STOP_DECISION: KeySpec("agent.eqa.stopping.StopDecision or None", ("UpdatePredictionSet",),
+                           ("CheckConfidence", "Answer"), ""),
+    PREDICTION_SET: KeySpec("list[str], the running conformal set (cp rule only, else None)",
+                            ("UpdatePredictionSet",), ("EpisodeSetup",), ""),
+    Q_HAT: KeySpec("float, the calibrated conformal threshold (cp rule only, else None)", ("UpdatePredictionSet",),
+                   (), ""),
+    EPSILON: KeySpec("float, the miscoverage the user accepts (cp rule only, else None)", ("UpdatePredictionSet",),
+                     (), ""),
+    ACTS: KeySpec("list[behaviours.episode_state.ActRecord], every try to open storage and look inside",
+                  ("EpisodeSetup", "LookInside"), ("ApproachStorage", "EpisodeSetup"), "[]"),
+    APPROACH_STATE: KeySpec("behaviours.episode_state.ApproachState", ("EpisodeSetup", "ApproachStorage"),
+                            ("ApproachStorage",), "nothing seen yet"),
+    LOOK_INSIDE_STATE: KeySpec("behaviours.episode_state.LookInsideState", ("EpisodeSetup", "LookInside"),
+                               ("LookInside",), "nothing seen or tried yet"),
+}
+
+
+@dataclass(frozen=True)
+class EpisodeStart:
+    """What an episode's board is seeded from."""
+
+    question: str
+    choices: list[str]
+    budget: int
+    start_pose: tuple[float, float, float]
+    map_config: OccupancyConfig
+    strategy: ExploreStrategy
+    semantic_values: SemanticValueConfig
+
+
+def seed_board(start: EpisodeStart, name: str = "EpisodeSetup") -> py_trees.blackboard.Client:
+    """Put one episode's initial values on the (cleared) board.
+
+    Args:
+        start: the question, budget, start pose and settings of the episode.
+        name: the client's name.
+
+    Returns:
+        The client that seeded the board, with WRITE access to what it seeded.
+    """
+    world_map = ExplorationMap(start.start_pose[:2], start.map_config)
+    initial: dict[str, Any] = {
+        QUESTION: start.question,
+        CHOICES: list(start.choices),
+        BUDGET: start.budget,
+        MAP: world_map,
+        ANSWER_LOG: AnswerLog(),
+        TRAJECTORY: [start.start_pose],
+        PLAN: None,
+        FRONTIER_GOAL: None,
+        EXPLORATION_COMPLETE: False,
+        MAP_FIELDS: MapFields(),
+        ACTS: [],
+        APPROACH_STATE: ApproachState(),
+        LOOK_INSIDE_STATE: LookInsideState(),
+    }
+    if start.strategy.use_semantic:
+        initial[SEMANTIC_MAP] = start.strategy.new_semantic_map(world_map.spec, start.semantic_values)
+    writer = py_trees.blackboard.Client(name=name)
+    for key, value in initial.items():
+        writer.register_key(key, access=Access.WRITE)
+        writer.set(key, value)
+    return writer

@@ -4,16 +4,16 @@
 
     EQA episode (selector: until answered)
     ├─ Confident (sequence)         CheckConfidence → Answer
-    ├─ Out of budget (sequence)     BudgetSpent → AnswerFallback
+    ├─ Out of budget (sequence)     ShouldStop → AnswerFallback
     └─ Step (sequence, memory)      Observe → IntegrateMap → QueryVLM → UpdatePredictionSet → Act → Next move
-                                    Act (selector):       Confident enough (CheckConfidence)
+                                    Act (selector):       CheckConfidence before act
                                                           or Look inside: LookInside → QueryVLM inside → UpdatePredictionSet
                                                           or Nothing to open
-                                    Next move (selector): StopHere (CheckConfidence)
+                                    Next move (selector): CheckConfidence before move
                                                           or Go on: [QueryDirections] → Explore
                                     Explore (sequence):   Where to (selector) → Move or finish
                                     Where to (selector):  ApproachStorage or SelectFrontier
-                                    Move or finish (sel.): NothingLeftToExplore (no frontier planned)
+                                    Move or finish (sel.): MarkExplorationComplete (no frontier planned)
                                                           or Navigate
 
 The stopping rule (conformal prediction by default) decides in UpdatePredictionSet; a confident
@@ -35,9 +35,9 @@ import py_trees
 
 from behaviours import blackboard as bb
 from agent.mapping.semantic_map import SemanticValueConfig
-from agent.planning.explore import ExploreConfig
+from agent.planning.frontier_plan import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
-from agent.planning.semantic import FrontierWeightConfig, method_flags
+from agent.planning.semantic import FrontierWeightConfig
 from agent.timing import StageTimer
 from worlds.bus.link import WorldLink
 from agent.vlm.protocol import VisionLanguageModel
@@ -45,13 +45,13 @@ from agent.eqa.stopping import BudgetRule, StoppingRule
 from behaviours.answer import Answer, AnswerFallback, ShouldStop
 from behaviours.approach_storage import ApproachStorage
 from behaviours.confidence import CheckConfidence, UpdatePredictionSet
-from behaviours.explore import MarkExplorationComplete, SelectFrontier
+from behaviours.select_frontier import MarkExplorationComplete, SelectFrontier
 from behaviours.integrate_map import IntegrateMap
 from behaviours.look_inside import LookInside, LookInsideConfig
 from behaviours.navigate import Navigate
 from behaviours.observe import Observe
 from behaviours.query_directions import QueryDirections
-from behaviours.query_vlm import QueryVLM
+from behaviours.query_answer import QueryVLM
 
 
 @dataclass(frozen=True)
@@ -93,12 +93,12 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     explore: py_trees.behaviour.Behaviour = py_trees.composites.Sequence("Explore", memory=True, children=[
         where_to, move_or_finish,
     ])
-    if method_flags(parts.explore.method).use_semantic:
-        directions = QueryDirections(parts.vlm, parts.explore.method, rng, parts.prompt_points,
+    if parts.explore.strategy.use_semantic:
+        directions = QueryDirections(parts.vlm, parts.explore.strategy, rng, parts.prompt_points,
                                      parts.semantic_values, parts.vlm_timeout_s, timer, parts.images_dir)
         explore = py_trees.composites.Sequence("Go on", memory=True, children=[directions, explore])
     next_move = py_trees.composites.Selector(
-        "Next move", memory=False, children=[CheckConfidence("StopHere"), explore]
+        "Next move", memory=False, children=[CheckConfidence("CheckConfidence before move"), explore]
     )
     act: list[py_trees.behaviour.Behaviour] = []
     if parts.act is not None:
@@ -108,7 +108,7 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
             UpdatePredictionSet(parts.stopping, "UpdatePredictionSet inside"),
         ])
         act = [py_trees.composites.Selector("Act", memory=False, children=[
-            CheckConfidence("Confident enough"), look_inside, py_trees.behaviours.Success("Nothing to open"),
+            CheckConfidence("CheckConfidence before act"), look_inside, py_trees.behaviours.Success("Nothing to open"),
         ])]
     step = py_trees.composites.Sequence("Step", memory=True, children=[
         Observe(parts.link, timer), IntegrateMap(timer), QueryVLM(parts.vlm, parts.vlm_timeout_s, timer),

@@ -17,7 +17,7 @@ class IntegrateMap(py_trees.behaviour.Behaviour):
         self.timer = timer
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.OBSERVATION, access=Access.READ)
-        self.blackboard.register_key(bb.MAP, access=Access.READ)
+        self.blackboard.register_key(bb.MAP, access=Access.WRITE)  # fuses the frame into it
 
     def update(self) -> Status:
         observation = self.blackboard.get(bb.OBSERVATION)

@@ -29,8 +29,8 @@ Each part is opened once per episode. The arm takes seconds; the behaviour stays
 (the robot works in a thread of its own and the tree keeps ticking). It fails, saying why, when
 there is nothing to open (so the tree goes on exploring) or nothing could be seen inside; a robot
 that moved and saw nothing leaves a fresh frame from where it stands as the observation. Every
-attempt on a part is recorded under the blackboard key ``acts`` and in the episode's record: what
-was tried, where the piece stands (``piece_xy``), how far it opened, whether the frames went to
+attempt on a part is recorded under the blackboard key ``acts`` (`behaviours.episode_state.ActRecord`)
+and in the episode's record: what was tried, where the piece stands (``piece_xy``), how far it opened, whether the frames went to
 the VLM, whether it was closed again, and at which stage and why it failed.
 """
 
@@ -42,20 +42,19 @@ import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.episode_state import ActRecord, LookInsideState
 from skills.robot import Robot, RobotConfig
 from worlds.bus.rpc import QueryFailed
 from agent.eqa.storage_question import room_in_question, storage_in_question
 from agent.observation import Observation
 from agent.perception.directions import GeometryError
-from agent.perception.instances import STORAGE_CATEGORIES, Instance, MemoryConfig
-from agent.perception.memory import InstanceMemory
+from agent.perception.instances import STORAGE_CATEGORIES, Instance
 from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.planning.room_goal import RoomFloors, room_of_piece
 from agent.planning.route import Routes, routes_from
@@ -71,10 +70,6 @@ log = logging.getLogger(__name__)
 PARTS = ("door", "drawer")
 #: What a view into storage shows besides what lies in it.
 NOT_CONTENTS = frozenset({*STORAGE_CATEGORIES, *PARTS, "handle", "floor", "wall"})
-#: Parts attach to the part or piece with voxels this near (`MemoryConfig.part_gap_m`): a little
-#: more than the memory's default, since storage is often first seen from metres away, where a
-#: handle's few voxels lie further off its door.
-PART_GAP_M = 0.07
 #: Pieces of one kind with centres this near, in the same room, are one piece the memory holds in
 #: fragments: "the cabinet in the bathroom" says there is one, and carcasses of one piece seen from
 #: two sides lie well within this.
@@ -112,10 +107,14 @@ class LookInsideConfig:
 class _Outcome:
     views: list[Observation]  # for each part looked into, the frame of it for the VLM
     last: Observation | None  # a head frame from where the robot ended, when it moved
-    records: list[dict[str, Any]]  # one per part tried
+    records: list[ActRecord]  # one per part tried
 
 
 class LookInside(py_trees.behaviour.Behaviour):
+    """Opens the storage the question asks about and leaves the views inside for the VLM (see the
+    module docstring). What it has seen and opened over the episode is the blackboard's
+    ``look_inside_state``; the arm works in a thread of the executor made in `setup`."""
+
     def __init__(self, link: WorldLink, config: LookInsideConfig = LookInsideConfig(),
                  name: str = "LookInside") -> None:
         super().__init__(name)
@@ -129,33 +128,42 @@ class LookInside(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.INSIDE_VIEW, access=Access.WRITE)
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
         self.blackboard.register_key(bb.ACTS, access=Access.WRITE)
-        self.memory = InstanceMemory(MemoryConfig(part_gap_m=PART_GAP_M))
-        self.rooms: dict[int, str] = {}  # storage piece (memory id) -> the room kind a frame showed it in
-        self.floors: RoomFloors | None = None  # the floor seen of each room kind, once the map is known
-        self.tried: set[int] = set()
-        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
+        self.blackboard.register_key(bb.MAP_FIELDS, access=Access.WRITE)
+        self.blackboard.register_key(bb.LOOK_INSIDE_STATE, access=Access.WRITE)
+        self._pool: ThreadPoolExecutor | None = None
         self._future: Future[_Outcome] | None = None
         self._stop = threading.Event()  # the running act's: set, it opens no further part
         self._why_not = ""
 
+    def setup(self, **kwargs: object) -> None:
+        """Make the executor the arm works in.
+
+        Args:
+            **kwargs: py_trees' setup arguments, unused.
+        """
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
+
     def initialise(self) -> None:
         self._future, self._why_not = None, ""
+        state: LookInsideState = self.blackboard.get(bb.LOOK_INSIDE_STATE)
         question = self.blackboard.get(bb.QUESTION)
         kind = storage_in_question(question)
         if kind is None:
             self._why_not = "the question asks about no storage"
             return
         observation: Observation = self.blackboard.get(bb.OBSERVATION)
-        self._integrate(observation)
-        part = self._next_part(kind, room_in_question(question), observation.base_pose)
+        self._integrate(state, observation)
+        part = self._next_part(state, kind, room_in_question(question), observation.base_pose)
         if part is None:
             self._why_not = f"no unopened {kind} door or drawer seen within {self.config.reach_m:g} m"
             return
         routes = None
         if self.blackboard.exists(bb.MAP):  # planned here, while the map holds still
-            routes = routes_from(self.blackboard.get(bb.MAP), np.asarray(observation.base_pose[:2]))
+            routes = routes_from(self.blackboard.get(bb.MAP), np.asarray(observation.base_pose[:2]),
+                                 fields=self.blackboard.get(bb.MAP_FIELDS))
         self._stop = threading.Event()
-        self._future = self._pool.submit(self._open_and_look, kind, part, routes, self._stop)
+        assert self._pool is not None, "LookInside.setup() makes the executor the arm works in"
+        self._future = self._pool.submit(self._open_and_look, state, kind, part, routes, self._stop)
 
     def update(self) -> Status:
         if self._future is None:
@@ -168,11 +176,11 @@ class LookInside(py_trees.behaviour.Behaviour):
         if outcome.views and self.blackboard.exists(bb.ANSWER_LOG):  # the step the VLM's look inside will be
             step = len(self.blackboard.get(bb.ANSWER_LOG)) + 1
             for record in outcome.records:
-                if record["looked"]:
-                    record["step"] = step
+                if record.looked:
+                    record.step = step
         acts = list(self.blackboard.get(bb.ACTS)) if self.blackboard.exists(bb.ACTS) else []
         self.blackboard.set(bb.ACTS, [*acts, *outcome.records])
-        self.feedback_message = "; ".join(record["outcome"] for record in outcome.records)
+        self.feedback_message = "; ".join(record.outcome for record in outcome.records)
         if outcome.views:
             self.blackboard.set(bb.INSIDE_VIEW, side_by_side(outcome.views))
         if outcome.last is not None:
@@ -196,106 +204,107 @@ class LookInside(py_trees.behaviour.Behaviour):
                 self._future.result(timeout=self.config.skill_timeout_s)
             except TimeoutError:
                 log.warning("the arm was still at work %g s after the episode ended", self.config.skill_timeout_s)
-        self._pool.shutdown(wait=False, cancel_futures=True)
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
 
-    def _integrate(self, observation: Observation) -> None:
+    def _integrate(self, state: LookInsideState, observation: Observation) -> None:
         """The frame into the memory, and the room kind of every storage piece it shows standing
         in a room that something in view names."""
-        update = self.memory.integrate(observation)
+        update = state.memory.integrate(observation)
         reading = read_rooms(observation)
-        if self.floors is None and self.blackboard.exists(bb.MAP):
-            self.floors = RoomFloors(self.blackboard.get(bb.MAP).spec)
-        if self.floors is not None:
+        if state.floors is None and self.blackboard.exists(bb.MAP):
+            state.floors = RoomFloors(self.blackboard.get(bb.MAP).spec)
+        if state.floors is not None:
             for kind, points in floor_points_by_kind(observation, reading, self.config.approach.sightings.max_depth_m).items():
-                self.floors.add(kind, points)
+                state.floors.add(kind, points)
         rooms = {label.id: room for label in observation.labels if label.category in STORAGE_CATEGORIES
                  and (room := reading.room_of(label.id)) is not None}
         for key in (*update.created, *update.updated):
-            inst = self.memory.get(key)
+            inst = state.memory.get(key)
             if inst.hint in rooms:
-                self.rooms[inst.id] = rooms[inst.hint]
+                state.rooms[inst.id] = rooms[inst.hint]
 
-    def _next_part(self, kind: str, room: str | None, base_pose: tuple[float, float, float]) -> Instance | None:
+    def _next_part(self, state: LookInsideState, kind: str, room: str | None, base_pose: tuple[float, float, float]) -> Instance | None:
         """The first unopened part with a handle (`_untried_part`) of the nearest piece of ``kind``
         within reach, pieces seen in a room of ``room``'s kind first and pieces seen in a room of
         another kind never."""
         room = None if room is None else room_kind(room)
         here = np.asarray(base_pose[:2], dtype=float)
         pieces = []
-        for piece in self.memory.with_label(kind):
-            seen_in = self._room_of(piece)
+        for piece in state.memory.with_label(kind):
+            seen_in = self._room_of(state, piece)
             distance = float(np.linalg.norm(piece.centroid[:2] - here))
             if distance <= self.config.reach_m and (room is None or seen_in in (None, room)):
                 pieces.append((seen_in != room, distance, piece.id))
         for _, _, piece_id in sorted(pieces):
-            part = self._untried_part(piece_id)
+            part = self._untried_part(state, piece_id)
             if part is not None:
                 return part
         return None
 
-    def _room_of(self, piece: Instance) -> str | None:
+    def _room_of(self, state: LookInsideState, piece: Instance) -> str | None:
         """The room kind ``piece`` stands in as far as the frames tell (`room_of_piece`)."""
-        told = self.rooms.get(piece.id)
-        if self.floors is None:
+        told = state.rooms.get(piece.id)
+        if state.floors is None:
             return told
-        return room_of_piece(told, self.floors, piece.centroid[:2], self.config.approach.room_floor_m)
+        return room_of_piece(told, state.floors, piece.centroid[:2], self.config.approach.room_floor_m)
 
-    def _untried_part(self, piece_id: int) -> Instance | None:
+    def _untried_part(self, state: LookInsideState, piece_id: int) -> Instance | None:
         """A door or drawer with a handle seen on it, not tried yet and not gone, of the piece or of
         a piece of its kind that the memory keeps apart from it within `SIBLING_M` and not seen in
         another room (one piece seen in fragments: a wardrobe's two doors on two carcasses)."""
-        piece = self.memory.get(piece_id)
-        room = self._room_of(piece)
-        pieces = [piece, *(other for other in self.memory.with_label(piece.label) if other.id != piece.id
+        memory = state.memory
+        piece = memory.get(piece_id)
+        room = self._room_of(state, piece)
+        pieces = [piece, *(other for other in memory.with_label(piece.label) if other.id != piece.id
                            and float(np.linalg.norm(other.centroid[:2] - piece.centroid[:2])) <= SIBLING_M
-                           and self._room_of(other) in (None, room))]
+                           and self._room_of(state, other) in (None, room))]
         for child in (child for holder in pieces for child in holder.children):
-            part = self.memory.get(child)
-            handled = any(self.memory.get(c).label == "handle" for c in part.children)
-            if part.label in PARTS and handled and part.id not in self.tried and not part.gone:
+            part = memory.get(child)
+            handled = any(memory.get(c).label == "handle" for c in part.children)
+            if part.label in PARTS and handled and part.id not in state.tried and not part.gone:
                 return part
         return None
 
-    def _open_and_look(self, kind: str, first: Instance, routes: Routes | None, stop: threading.Event) -> _Outcome:
+    def _open_and_look(self, state: LookInsideState, kind: str, first: Instance, routes: Routes | None,
+                       stop: threading.Event) -> _Outcome:
         """In the worker thread: each door and drawer of ``first``'s piece in turn (``first`` first,
         then those seen since, up to ``max_parts``): open, look, close, stow. It stops at a part it
         could not shut or stow after, and once ``stop`` is set. Never raises: the records say why."""
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
                                              hold_open=True, scan_table_edge=False),  # storage stands on the floor
-                      memory=self.memory, routes=routes)
+                      memory=state.memory, routes=routes)
         piece = first.parent if first.parent is not None else first.id
-        records: list[dict[str, Any]] = []
+        records: list[ActRecord] = []
         views: list[Observation] = []
         before: Observation | None = None  # the piece as it stood, from the first stand reached
         part: Instance | None = first
         while part is not None:
-            self.tried.add(part.id)
-            part_views, record = self._open_one(robot, kind, part, piece, look_first=not records)
+            state.tried.add(part.id)
+            part_views, record = self._open_one(state, robot, kind, part, piece, look_first=not records)
             records.append(record)
             before = before or robot.before
             if part_views:
                 views.append(_view_for_vlm(part_views))
-            if (record["closed"] is False or record["stage"] in ("look", "stow") or len(records) >= self.config.max_parts
+            if (record.closed is False or record.stage in ("look", "stow") or len(records) >= self.config.max_parts
                     or stop.is_set()):
                 break
-            part = self._untried_part(piece)
-        missed = any(not record["looked"] for record in records) or self._untried_part(piece) is not None
+            part = self._untried_part(state, piece)
+        missed = any(not record.looked for record in records) or self._untried_part(state, piece) is not None
         if views and missed and before is not None:
             # Some door or drawer was not looked behind: the piece as it stood shows it shut, so
             # that what the VLM sees is not taken for the whole piece open and empty.
             views.insert(0, before)
         return _Outcome(views, _head_frame(robot) if _moved(robot) else None, records)
 
-    def _open_one(self, robot: Robot, kind: str, part: Instance, piece: int,
-                  look_first: bool) -> tuple[list[Observation], dict[str, Any]]:
+    def _open_one(self, state: LookInsideState, robot: Robot, kind: str, part: Instance, piece: int,
+                  look_first: bool) -> tuple[list[Observation], ActRecord]:
         """Open one part, look, close, stow (first a look from where the robot stands, for the
         first part of an act): the frames to show the VLM and the act's record."""
         began = time.monotonic()
         unit = "opening_deg" if part.label == "door" else "opening_m"
-        centre = self.memory.get(piece).centroid[:2]
-        record: dict[str, Any] = {"storage": kind, "part": f"{part.label} {part.id}",
-                                  "piece_xy": [round(float(v), 2) for v in centre], "opened": False, unit: 0.0,
-                                  "looked": False, "closed": None, "stage": None, "reason": ""}
+        centre = state.memory.get(piece).centroid[:2]
+        record = ActRecord(kind, f"{part.label} {part.id}", [round(float(v), 2) for v in centre], unit)
         views: list[Observation] = []
         stage = "look"
         try:
@@ -304,29 +313,28 @@ class LookInside(py_trees.behaviour.Behaviour):
             stage = "open"
             opened = robot.open_part(part)
             amount = robot.opening(part)
-            record.update({"opened": opened.ok, unit: round(math.degrees(amount) if unit == "opening_deg" else amount, 3)})
+            record.opened = opened.ok
+            record.opening = round(math.degrees(amount) if unit == "opening_deg" else amount, 3)
             if not opened.ok:
-                record.update(stage=stage, reason=opened.reason)
+                record.stage, record.reason = stage, opened.reason
             if amount >= self.config.min_look[part.label]:
                 views = list(robot.views)
             if amount > 0:
                 stage = "close"
                 closed = robot.close_part(part)
-                record["closed"] = closed.ok
-                if not closed.ok and not record["stage"]:
-                    record.update(stage=stage, reason=closed.reason)
+                record.closed = closed.ok
+                if not closed.ok:
+                    record.fail(stage, closed.reason)
             stage = "stow"
             robot.stow()
         except (GeometryError, SkillPlanError, QueryFailed, ValueError) as error:
-            if not record["stage"]:
-                record.update(stage=stage, reason=str(error))
+            record.fail(stage, str(error))
         except Exception as error:  # a bug in the arm's code fails this act, not the whole episode
             log.exception("looking inside the %s raised", kind)
-            if not record["stage"]:
-                record.update(stage=stage, reason=f"{type(error).__name__}: {error}")
-        record["looked"] = bool(views)
-        record["outcome"] = _outcome_text(kind, part.label, record)
-        record["seconds"] = round(time.monotonic() - began, 1)
+            record.fail(stage, f"{type(error).__name__}: {error}")
+        record.looked = bool(views)
+        record.outcome = _outcome_text(kind, part.label, record)
+        record.seconds = round(time.monotonic() - began, 1)
         return views, record
 
 
@@ -355,16 +363,16 @@ def _head_frame(robot: Robot) -> Observation | None:
         return None
 
 
-def _outcome_text(kind: str, label: str, record: dict[str, Any]) -> str:
+def _outcome_text(kind: str, label: str, record: ActRecord) -> str:
     """One line for the feedback message and the record."""
-    if record["looked"]:
+    if record.looked:
         text = f"opened the {kind}'s {label}, looked inside"
-        if record["stage"] == "open":
-            text += f" (it opened only part of the way: {record['reason']})"
+        if record.stage == "open":
+            text += f" (it opened only part of the way: {record.reason})"
     else:
-        text = f"could not open the {kind}'s {label}: {record['reason']}"
-    if record["closed"] is False:
-        text += "; could not close it" + (f": {record['reason']}" if record["stage"] == "close" else "")
-    elif record["stage"] == "stow":
-        text += f"; {record['reason']}"
+        text = f"could not open the {kind}'s {label}: {record.reason}"
+    if record.closed is False:
+        text += "; could not close it" + (f": {record.reason}" if record.stage == "close" else "")
+    elif record.stage == "stow":
+        text += f"; {record.reason}"
     return text

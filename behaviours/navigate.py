@@ -24,7 +24,7 @@ class Navigate(WorldCommand):
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.PLAN, access=Access.READ)
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
-        self.blackboard.register_key(bb.MAP, access=Access.READ)
+        self.blackboard.register_key(bb.MAP, access=Access.WRITE)  # marks where it drove and bumped
         self.blackboard.register_key(bb.FRONTIER_GOAL, access=Access.WRITE)
 
     def request(self) -> dict[str, Any]:

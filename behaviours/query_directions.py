@@ -19,26 +19,27 @@ from agent.eqa.prompts import YES_NO, gsv_prompt, lsv_prompt
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.observation import Observation
 from agent.planning.prompt_points import PromptPoint, PromptPointConfig, prompt_points
-from agent.planning.semantic import point_values
+from agent.planning.explore_method import ExploreStrategy
 from agent.timing import StageTimer
 from agent.vlm.annotate import draw_marks
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
-from behaviours.vlm_query import VLMQuery
+from behaviours.async_vlm import AsyncVLMQuery
 
 
-class QueryDirections(VLMQuery):
+class QueryDirections(AsyncVLMQuery):
     stage = "vlm_directions"
 
-    def __init__(self, vlm: VisionLanguageModel, method: str, rng: np.random.Generator,
+    def __init__(self, vlm: VisionLanguageModel, strategy: ExploreStrategy, rng: np.random.Generator,
                  points: PromptPointConfig = PromptPointConfig(), values: SemanticValueConfig = SemanticValueConfig(),
                  timeout_s: float = 30.0, timer: StageTimer | None = None, images_dir: Path | None = None,
                  name: str = "QueryDirections") -> None:
         super().__init__(name, vlm, timeout_s, timer)
-        self.method, self.rng, self.points_config, self.values_config = method, rng, points, values
+        self.strategy, self.rng, self.points_config, self.values_config = strategy, rng, points, values
         self.images_dir = images_dir
         self.blackboard = self.attach_blackboard_client(name=name)
-        for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.SEMANTIC_MAP, bb.ANSWER_LOG):
+        for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ANSWER_LOG):
             self.blackboard.register_key(key, access=Access.READ)
+        self.blackboard.register_key(bb.SEMANTIC_MAP, access=Access.WRITE)  # the directions' values go into it
 
     def inputs(self) -> tuple[Observation, str, list[PromptPoint], int]:
         observation: Observation = self.blackboard.get(bb.OBSERVATION)
@@ -64,7 +65,7 @@ class QueryDirections(VLMQuery):
         if not points:
             self.feedback_message = "no free floor in view to point at"
             return Status.SUCCESS
-        values = point_values([lsv[p.letter] for p in points], p_yes, self.method, self.values_config)
+        values = self.strategy.point_values([lsv[p.letter] for p in points], p_yes, self.values_config)
         self.blackboard.get(bb.SEMANTIC_MAP).update(np.array([p.xy for p in points]), values)
         best = max(lsv, key=lsv.__getitem__)
         self.feedback_message = f"{len(points)} directions: LSV favours {best} ({lsv[best]:.2f}), GSV {p_yes:.2f}"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from agent.acsg.decision import PROPOSER_USER, VERIFIER_USER, PromptDecisionModule, RuleDecisionModule
-from agent.acsg.explore import ExploreConfig, explore
+from agent.acsg.interactive_exploration import InteractiveExploreConfig, explore
 from agent.acsg.interfaces import DecisionContext, SkillCall, SkillResult
 from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import aligned_edit_distance, episode_metrics, position_recovery
@@ -45,7 +45,7 @@ class Recorder:
         return result
 
     def run(self, **config):
-        return explore(self, self, self, ExploreConfig(**config) if config else None)
+        return explore(self, self, self, InteractiveExploreConfig(**config) if config else None)
 
 
 def matryoshka() -> SymbolicScene:

@@ -13,7 +13,7 @@ from agent.eqa.answers import AnswerLog
 from agent.eqa.stopping import BudgetRule, ConformalRule, RelevanceRule
 from behaviours.answer import Answer, AnswerFallback
 from behaviours.confidence import CheckConfidence, UpdatePredictionSet
-from behaviours.explore import MarkExplorationComplete
+from behaviours.select_frontier import MarkExplorationComplete
 
 CHOICES = ["kitchen", "bedroom", "garage", "office"]
 

@@ -9,7 +9,7 @@ import pytest
 from agent.app.config import BusSettings, CameraSettings, Config, ConfigError, EpisodeSettings, load_config, merge
 from agent.mapping.occupancy import OccupancyConfig
 from agent.mapping.tsdf import TsdfConfig
-from agent.planning.explore import ExploreConfig
+from agent.planning.frontier_plan import ExploreConfig
 from agent.vlm.sim import SimParams
 
 

@@ -158,7 +158,7 @@ def test_a_semantic_episode_shows_the_vlm_its_visual_prompts(tmp_path: Path) -> 
 
 
 def test_eval_explore_runs_in_workers_and_resumes(tmp_path: Path) -> None:
-    from agent.app.eval.explore import evaluate_explore
+    from agent.app.eval.method_comparison import evaluate_explore
     from worlds.suite import plan_split, write_suite
 
     suite = write_suite(tmp_path / "suite", plan_split(2, [2], 50, ("suite",)))["suite"]

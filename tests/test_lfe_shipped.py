@@ -10,6 +10,7 @@ from py_trees.common import Access, Status
 from scipy.stats import spearmanr
 
 from behaviours import blackboard as bb
+from agent.planning.map_fields import MapFields
 from agent.eqa.answers import AnswerLog
 from agent.app.eval.coverage import SEED_BASE
 from agent.lfe.coverage import fbe_near, run_coverage
@@ -19,8 +20,8 @@ from agent.lfe.task import CoverageConfig, Situation, TrueHome
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import Observation
-from agent.planning.explore import ExploreConfig
-from behaviours.explore import SelectFrontier
+from agent.planning.frontier_plan import ExploreConfig
+from behaviours.select_frontier import SelectFrontier
 from worlds.home import generate_home
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
@@ -74,9 +75,10 @@ def corridor_map() -> ExplorationMap:
 
 def test_the_tree_s_lfe_method_plans_a_move_toward_a_frontier() -> None:
     board = py_trees.blackboard.Client(name="test")
-    for key in (bb.MAP, bb.OBSERVATION, bb.BUDGET, bb.ANSWER_LOG, bb.PLAN, bb.FRONTIER_GOAL):
+    for key in (bb.MAP, bb.OBSERVATION, bb.BUDGET, bb.ANSWER_LOG, bb.PLAN, bb.FRONTIER_GOAL, bb.MAP_FIELDS):
         board.register_key(key, access=Access.WRITE)
     board.set(bb.FRONTIER_GOAL, None)
+    board.set(bb.MAP_FIELDS, MapFields())
     try:
         robot = (-1.0, 0.0, 0.0)
         size = 4

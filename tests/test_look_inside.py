@@ -14,6 +14,7 @@ import pytest
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.episode_state import LookInsideState
 from agent.observation import Observation
 from agent.app.runtime.local_world import LocalWorld, local_world
 from worlds.bus.link import WorldLink
@@ -53,8 +54,9 @@ def test_the_room_the_storage_stands_in(question: str, room: str | None) -> None
 @pytest.fixture
 def board() -> py_trees.blackboard.Client:
     client = py_trees.blackboard.Client(name="test")
-    for key in (bb.QUESTION, bb.OBSERVATION, bb.INSIDE_VIEW, bb.ACTS):
+    for key in (bb.QUESTION, bb.OBSERVATION, bb.INSIDE_VIEW, bb.ACTS, bb.LOOK_INSIDE_STATE):
         client.register_key(key, access=Access.WRITE)
+    client.set(bb.LOOK_INSIDE_STATE, LookInsideState())
     yield client
     py_trees.blackboard.Blackboard.clear()
 
@@ -106,12 +108,13 @@ def test_the_robot_opens_the_cabinet_the_question_names_and_the_view_shows_its_c
         assert scenario.question == "What is inside the cabinet in the bathroom?" and scenario.answer_text == "bottle"
         assert "bottle" not in {label.category for label in first.labels}  # hidden behind the door
         behaviour = LookInside(link)
+        behaviour.setup()
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         assert "bottle" in {label.category for label in board.get(bb.INSIDE_VIEW).labels}  # what the VLM sees
         [act] = board.get(bb.ACTS)
-        assert act["storage"] == "cabinet" and act["outcome"].startswith("opened the cabinet's door")
-        assert act["opened"] and act["looked"] and act["closed"] and act["stage"] is None
-        assert np.allclose(act["piece_xy"], piece.center[:2], atol=0.3)
+        assert act.storage == "cabinet" and act.outcome.startswith("opened the cabinet's door")
+        assert act.opened and act.looked and act.closed and act.stage is None
+        assert np.allclose(act.piece_xy, piece.center[:2], atol=0.3)
         # put back as found, and the robot stands where the frame it leaves says it does
         assert _put_back(served, link, piece)
         last, here = board.get(bb.OBSERVATION), Observation.from_message(link.call("observe", {}))
@@ -130,10 +133,11 @@ def test_every_door_of_a_two_door_cabinet_is_opened_and_the_vlm_sees_both_compar
         assert scenario.question == "Is there any hammer in the cabinet in the bathroom?" and scenario.answer_text == "Yes"
         assert [part.kind for part in piece.storage.parts] == ["door", "door"]
         behaviour = LookInside(link)
+        behaviour.setup()
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         acts = board.get(bb.ACTS)
-        assert len(acts) == 2 and len({act["part"] for act in acts}) == 2
-        assert all(act["opened"] and act["looked"] and act["closed"] for act in acts)
+        assert len(acts) == 2 and len({act.part for act in acts}) == 2
+        assert all(act.opened and act.looked and act.closed for act in acts)
         inside = board.get(bb.INSIDE_VIEW)
         assert inside.rgb.shape[1] == 2 * first.rgb.shape[1]  # one view into each compartment
         assert "hammer" in {label.category for label in inside.labels}
@@ -147,6 +151,7 @@ def test_a_door_not_looked_behind_shows_shut_beside_the_empty_compartment_and_no
     row, its other door shut, and "No" is a guess."""
     with _before_the_storage(9, board, scenario_seed=4) as (served, link, scenario, piece, first):
         behaviour = LookInside(link, LookInsideConfig(max_parts=1))
+        behaviour.setup()
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         inside = board.get(bb.INSIDE_VIEW)
         assert inside.rgb.shape[1] == 2 * first.rgb.shape[1]  # the piece as it stood, and the compartment
@@ -166,9 +171,10 @@ def test_a_fridge_door_wider_than_the_robot_is_swung_wide_and_shut_again(board) 
     with _before_the_storage(13, board) as (served, link, scenario, piece, _):
         assert scenario.question == "What is inside the fridge in the kitchen?"
         behaviour = LookInside(link)
+        behaviour.setup()
         assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
         [act] = board.get(bb.ACTS)
-        assert act["opened"] and act["opening_deg"] > 60.0 and act["closed"]
+        assert act.opened and act.unit == "opening_deg" and act.opening > 60.0 and act.closed
         assert "bowl" in {label.category for label in board.get(bb.INSIDE_VIEW).labels}
         assert _put_back(served, link, piece)
 
@@ -176,6 +182,7 @@ def test_a_fridge_door_wider_than_the_robot_is_swung_wide_and_shut_again(board) 
 def test_a_question_about_no_storage_fails_at_once_saying_so(board) -> None:
     board.set(bb.QUESTION, "How many cups are there in the kitchen?")
     behaviour = LookInside(link=None)  # type: ignore[arg-type]  # never reached: nothing to open
+    behaviour.setup()
     assert _tick(behaviour, 5.0) == Status.FAILURE
     assert behaviour.feedback_message == "the question asks about no storage"
 
@@ -187,10 +194,12 @@ def test_an_act_stopped_by_the_episode_ends_with_the_part_in_hand_shut_and_opens
     cabinet's second door was never opened."""
     with _before_the_storage(9, board, scenario_seed=4) as (served, link, scenario, piece, first):
         behaviour = LookInside(link)
+        behaviour.setup()
         behaviour.tick_once()
         assert behaviour.status == Status.RUNNING
         time.sleep(1.0)  # the arm is on its way to the first door
         behaviour.stop(Status.INVALID)
         behaviour.shutdown()
         assert _put_back(served, link, piece)
-        assert behaviour.tried and len(behaviour.tried) == 1
+        tried = board.get(bb.LOOK_INSIDE_STATE).tried
+        assert tried and len(tried) == 1

@@ -13,7 +13,7 @@ import pytest
 
 from agent.app.config import ConfigError, load_config
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.planning.explore import reachable_frontiers
+from agent.planning.frontier_plan import reachable_frontiers
 from boxroom import BoxRoom, survey, walls_with_doorway
 
 ROOM = (0.0, 0.0, 6.0, 4.0)

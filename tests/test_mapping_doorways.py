@@ -15,7 +15,8 @@ import pytest
 
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.planning.explore import ExploreConfig, drive_field
+from agent.planning.frontier_plan import ExploreConfig
+from agent.planning.map_fields import drive_field
 from worlds.freespace import clearance
 from worlds.robot import CameraConfig
 from worlds.sim import World

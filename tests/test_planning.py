@@ -10,7 +10,7 @@ from scipy import ndimage
 
 from agent.mapping.grid import GridSpec
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.planning.explore import ExploreConfig, plan_move, reachable_frontiers
+from agent.planning.frontier_plan import ExploreConfig, plan_move, reachable_frontiers
 from agent.planning.frontier_choice import FrontierChoiceConfig, choose_frontier
 from agent.planning.frontier import cluster_frontiers, frontier_cells
 from agent.planning.paths import distance_field, path_length, simplify_path, truncate_path

@@ -13,7 +13,7 @@ from agent.mapping.camera import Intrinsics
 from agent.mapping.grid import GridSpec
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.mapping.semantic_map import SemanticMap, SemanticValueConfig, indifferent_value, semantic_value
-from agent.planning.explore import reachable_frontiers
+from agent.planning.frontier_plan import reachable_frontiers
 from agent.planning.frontier import cluster_frontiers, frontier_cells
 from agent.planning.prompt_points import (
     PromptPointConfig,
@@ -22,15 +22,8 @@ from agent.planning.prompt_points import (
     visible_free_cells,
 )
 from agent.planning.frontier_choice import FrontierChoiceConfig, choose_frontier, frontier_probabilities, sample_frontier
-from agent.planning.semantic import (
-    ExploreMethod,
-    FrontierWeightConfig,
-    frontier_log_weights,
-    method_flags,
-    new_semantic_map,
-    normal_ray_cells,
-    point_values,
-)
+from agent.planning.explore_method import ExploreMethod, ExploreStrategy
+from agent.planning.semantic import FrontierWeightConfig, frontier_log_weights, normal_ray_cells
 
 # --- a camera over an open floor ----------------------------------------------------------------
 
@@ -288,24 +281,25 @@ def test_map_update_at_the_edge_and_outside_the_grid() -> None:
 # --- methods and their ablations ----------------------------------------------------------------
 
 
-def test_method_flags() -> None:
-    assert method_flags("fbe") == method_flags(ExploreMethod.FBE)
-    flags = {m.value: method_flags(m) for m in ExploreMethod}
-    assert [(f.use_lsv, f.use_gsv, f.use_semantic) for f in flags.values()] == [
-        (False, False, False), (True, True, True), (False, True, True), (True, False, True), (False, False, False)]
+def test_explore_strategies() -> None:
+    assert ExploreStrategy.of("fbe") == ExploreStrategy.of(ExploreMethod.FBE)
+    flags = {m.value: ExploreStrategy.of(m) for m in ExploreMethod}
+    assert [(f.use_lsv, f.use_gsv, f.use_semantic, f.learned) for f in flags.values()] == [
+        (False, False, False, False), (True, True, True, False), (False, True, True, False),
+        (True, False, True, False), (False, False, False, True)]
     assert list(flags) == ["fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv", "lfe"]
     with pytest.raises(ValueError):
-        method_flags("clip-fbe")
+        ExploreStrategy.of("clip-fbe")
 
 
 def test_point_values_apply_the_ablations() -> None:
     letters, p_yes = [0.6, 0.3, 0.1], 0.8
-    np.testing.assert_allclose(point_values(letters, p_yes, "semantic"), np.exp(np.array(letters) + 0.8))
-    np.testing.assert_allclose(point_values([6, 3, 1], p_yes, "semantic"), np.exp(np.array(letters) + 0.8))
-    np.testing.assert_allclose(point_values(letters, p_yes, "semantic-no-lsv"), np.full(3, math.exp(0.8)))
-    np.testing.assert_allclose(point_values(letters, p_yes, "semantic-no-gsv"), np.exp(letters))
-    np.testing.assert_allclose(point_values([0.0, 0.0], 0.5, "semantic"), np.full(2, math.exp(0.5 + 0.5)))
-    no_lsv_map = new_semantic_map(GridSpec((0.0, 0.0), 0.1, (5, 5)), "semantic-no-lsv")
+    np.testing.assert_allclose(ExploreStrategy.of("semantic").point_values(letters, p_yes), np.exp(np.array(letters) + 0.8))
+    np.testing.assert_allclose(ExploreStrategy.of("semantic").point_values([6, 3, 1], p_yes), np.exp(np.array(letters) + 0.8))
+    np.testing.assert_allclose(ExploreStrategy.of("semantic-no-lsv").point_values(letters, p_yes), np.full(3, math.exp(0.8)))
+    np.testing.assert_allclose(ExploreStrategy.of("semantic-no-gsv").point_values(letters, p_yes), np.exp(letters))
+    np.testing.assert_allclose(ExploreStrategy.of("semantic").point_values([0.0, 0.0], 0.5), np.full(2, math.exp(0.5 + 0.5)))
+    no_lsv_map = ExploreStrategy.of("semantic-no-lsv").new_semantic_map(GridSpec((0.0, 0.0), 0.1, (5, 5)))
     assert no_lsv_map.default == pytest.approx(math.exp(0.5))
 
 
@@ -385,7 +379,7 @@ def test_sampled_choice_on_reachable_frontiers_follows_the_weights() -> None:
     candidates = reachable_frontiers(world_map, (0.0, 0.0))
     assert len(candidates.frontiers) == 2
     right = int(np.argmax([f.normal[0] for f in candidates.frontiers]))
-    semantic_map = new_semantic_map(world_map.spec, "semantic")
+    semantic_map = ExploreStrategy.of("semantic").new_semantic_map(world_map.spec)
     beyond = world_map.spec.to_world(np.array(candidates.frontiers[right].centre)) + [1.5, 0.0]
     semantic_map.update(beyond[None, :], [float(semantic_value(1.0, 1.0))])
     logs = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,

@@ -11,6 +11,8 @@ import pytest
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.episode_state import ActRecord, ApproachState
+from agent.planning.map_fields import MapFields
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
 from agent.observation import InstanceLabel, Observation
@@ -148,8 +150,11 @@ def test_a_piece_whose_room_no_frame_told_stands_in_the_room_of_the_floor_around
 @pytest.fixture
 def board() -> py_trees.blackboard.Client:
     client = py_trees.blackboard.Client(name="test")
-    for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ACTS, bb.PLAN):
+    for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ACTS, bb.PLAN, bb.MAP_FIELDS, bb.APPROACH_STATE):
         client.register_key(key, access=Access.WRITE)
+    client.set(bb.ACTS, [])
+    client.set(bb.MAP_FIELDS, MapFields())
+    client.set(bb.APPROACH_STATE, ApproachState())
     yield client
     py_trees.blackboard.Blackboard.clear()
 
@@ -189,7 +194,7 @@ def test_the_robot_heads_for_a_view_of_the_named_storage_seen_afar_until_it_was_
     np.testing.assert_allclose(plan.path_xy[0], [0.0, -2.0])
     assert np.linalg.norm(plan.path_xy[-1] - PIECE) == pytest.approx(1.6, abs=0.15)  # there in one step
     assert "towards a view of the cabinet" in behaviour.feedback_message
-    board.set(bb.ACTS, [{"storage": "cabinet", "piece_xy": [0.1, 2.6]}])  # the act branch tried it since
+    board.set(bb.ACTS, [ActRecord("cabinet", "door 6", [0.1, 2.6], "opening_deg")])  # the act branch tried it since
     board.set(bb.PLAN, None)
     assert _tick(behaviour) == Status.FAILURE and board.get(bb.PLAN) is None
     assert "no cabinet seen that is still to be looked at" in behaviour.feedback_message
@@ -204,7 +209,7 @@ def test_a_piece_seen_in_another_room_than_the_named_one_is_left_alone(board) ->
                                              (stove, (25, 50, 10, 8)), distance=4.7))
     behaviour = ApproachStorage()
     assert _tick(behaviour) == Status.FAILURE and "no cabinet seen" in behaviour.feedback_message
-    assert behaviour.sightings.pieces[0].room == "kitchen"
+    assert board.get(bb.APPROACH_STATE).sightings.pieces[0].room == "kitchen"
 
 
 def test_with_no_piece_seen_the_robot_heads_into_the_named_room_seen_afar(board) -> None:
@@ -216,6 +221,7 @@ def test_with_no_piece_seen_the_robot_heads_into_the_named_room_seen_afar(board)
     behaviour = ApproachStorage()
     assert _tick(behaviour) == Status.FAILURE  # a floor, but nothing says it is the bathroom's
     board.set(bb.OBSERVATION, _looking_north((floor, AHEAD), (toilet, (18, 38, 9, 5)), distance=4.0))
+    board.set(bb.APPROACH_STATE, ApproachState())  # a robot that has seen only this frame
     behaviour = ApproachStorage()
     assert _tick(behaviour) == Status.SUCCESS, behaviour.feedback_message
     assert "into the bathroom" in behaviour.feedback_message

@@ -18,7 +18,7 @@ are imported only when used.
 """
 
 from agent.acsg.decision import PromptDecisionModule, RuleDecisionModule
-from agent.acsg.explore import ExplorationResult, ExploreConfig, Explorer, LogEntry, explore
+from agent.acsg.interactive_exploration import ExplorationResult, InteractiveExploreConfig, Explorer, LogEntry, explore
 from agent.acsg.graph import ACSG, CycleError, UnknownObjectError
 from agent.acsg.interfaces import (
     DecisionContext,
@@ -36,7 +36,7 @@ from agent.acsg.symbolic import SymbolicScene, Thing
 
 __all__ = [
     "ACSG", "ACSGError", "ActionNode", "CycleError", "DecisionContext", "DecisionModule", "Detection", "Edge",
-    "ExplorationResult", "ExploreConfig", "Explorer", "LogEntry", "ObjectNode", "Perception",
+    "ExplorationResult", "InteractiveExploreConfig", "Explorer", "LogEntry", "ObjectNode", "Perception",
     "PromptDecisionModule", "RuleDecisionModule", "SkillCall", "SkillExecutor", "SkillResult", "SymbolicScene",
     "Thing", "UnknownObjectError", "explore", "from_ground_truth", "load_acsg", "retrieval_actions",
     "retrieval_plan",

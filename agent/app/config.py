@@ -17,7 +17,7 @@ from typing import Any
 from agent.eqa.stopping import StopConfig
 from agent.mapping.occupancy import OccupancyConfig
 from agent.mapping.semantic_map import SemanticValueConfig
-from agent.planning.explore import ExploreConfig
+from agent.planning.frontier_plan import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
 from agent.planning.semantic import FrontierWeightConfig
 from agent.vlm.settings import VLMSettings

@@ -12,7 +12,7 @@ What the robot knows:
   (one hidden from every viewpoint so far) is refused by the simulator; what the robot touched
   then becomes known occupied, as a bumper would tell.
 
-Frontiers are those of the EQA tree's explorer (`agent.planning.explore.reachable_frontiers`):
+Frontiers are those of the EQA tree's explorer (`agent.planning.frontier_plan.reachable_frontiers`):
 clusters of frontier cells among the cells reachable over traversable ones. A frontier whose
 centre lies within one forward move of the robot is not offered: the robot is already there.
 

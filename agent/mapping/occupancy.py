@@ -105,11 +105,13 @@ class ExplorationMap:
         self.occupied = np.zeros(self.spec.shape, dtype=bool)
         self.bumped = np.zeros(self.spec.shape, dtype=bool)
         self.obstacle_hits = np.zeros(self.spec.shape, dtype=bool)  # a depth pixel landed at obstacle height
+        self.revision = 0  # counts the changes below, so that what is derived from the map knows when to renew
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
                   robot_xy: tuple[float, float]) -> None:
         """Fuse one frame taken with the robot at ``robot_xy``."""
         config = self.config
+        self.revision += 1
         self.tsdf.integrate(depth, intrinsics, camera_to_world)
         # Only what the TSDF takes in may count as explored: a cell seen beyond its range could
         # never turn free, and a frontier that reaches it would vanish for good.
@@ -138,6 +140,7 @@ class ExplorationMap:
         Args:
             path_xy: the waypoints driven, in order, in world metres.
         """
+        self.revision += 1
         path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
         step = self.spec.resolution / 2
         for start, end in zip(path[:-1], path[1:]):
@@ -150,6 +153,7 @@ class ExplorationMap:
 
     def mark_contact(self, point_xy: tuple[float, float]) -> None:
         """Record an obstacle the robot touched but may never have seen (too low, too near)."""
+        self.revision += 1
         self.bumped |= self.spec.disc(point_xy, self.spec.resolution)
         self.occupied |= self.bumped
 

@@ -4,7 +4,7 @@ The world drives the base along a polyline and stops at the first contact, so a 
 stand beside furniture may cut through the furniture on the way. `Routes` answers, from where the
 robot stands, which places it can reach and by which path, over the same distance field that
 exploration plans on (free cells clear of obstacles by the robot's radius, paths kept off them:
-`agent.planning.explore.drive_field`), and which places the map at least does not know to
+`agent.planning.map_fields.drive_field`), and which places the map at least does not know to
 be blocked (their floor perhaps never seen). Built from the map while the map holds still, it may
 then be used from another thread while the tree ticks on. `step_towards` cuts a route to one
 step's move, for goals that take several steps to reach.
@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import ExploreConfig, MovePlan, drive_field
+from agent.planning.frontier_plan import ExploreConfig, MovePlan
+from agent.planning.map_fields import MapFields
 from agent.planning.paths import DistanceField, simplify_path, truncate_path
 
 #: Room kept, beyond the robot's radius, between a place to stand and the nearest obstacle on the
@@ -68,13 +69,24 @@ class Routes:
 
 
 def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: ExploreConfig = ExploreConfig(),
-                squeeze_m: float = 0.0) -> Routes:
-    """The routes from ``start_xy`` over ``world_map`` as it is now; with ``squeeze_m``, through gaps
-    that look that much too narrow on the map (`ExplorationMap.traversable`). Where the base may
-    stand is not squeezed."""
+                squeeze_m: float = 0.0, fields: MapFields | None = None) -> Routes:
+    """The routes from ``start_xy`` over ``world_map`` as it is now.
+
+    Args:
+        world_map: the robot's map.
+        start_xy: where the routes start (world x, y).
+        config: how far paths keep off obstacles.
+        squeeze_m: let routes pass gaps that look this much too narrow on the map
+            (`ExplorationMap.traversable`); where the base may stand is not squeezed.
+        fields: the map's fields shared with other planners this step (computed afresh without).
+
+    Returns:
+        The routes.
+    """
+    fields = MapFields() if fields is None else fields
     start = np.asarray(start_xy, dtype=float)[:2]
-    clearance = world_map.clearance()
-    field, _ = drive_field(world_map, (float(start[0]), float(start[1])), clearance, config, squeeze_m)
+    clearance = fields.clearance(world_map)
+    field, _ = fields.drive_field(world_map, (float(start[0]), float(start[1])), config, squeeze_m)
     return Routes(field, start, clearance, world_map.config.robot_radius)
 
 

@@ -321,7 +321,7 @@ def _suite_make(args: argparse.Namespace) -> int:
 
 
 def _eval_explore(args: argparse.Namespace) -> int:
-    from agent.app.eval.explore import evaluate_explore
+    from agent.app.eval.method_comparison import evaluate_explore
     from worlds.suite import SuiteError
 
     config = _suite_config(args)

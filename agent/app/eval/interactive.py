@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from agent.acsg.decision import RuleDecisionModule
-from agent.acsg.explore import explore
+from agent.acsg.interactive_exploration import explore
 from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from agent.acsg.decision import RuleDecisionModule
-from agent.acsg.explore import explore
+from agent.acsg.interactive_exploration import explore
 from agent.acsg.graph import ACSG
 from agent.acsg.json_format import acsg_from_dict, acsg_to_dict, from_ground_truth
 from agent.acsg.metrics import episode_metrics

@@ -43,6 +43,7 @@ class EpisodeRunner:
                  max_seconds: float, tick_period_s: float = 0.002,
                  timer: Any | None = None) -> None:
         self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree.setup()  # the leaves make their executors
         self.visitor = py_trees.visitors.SnapshotVisitor()
         self.tree.visitors.append(self.visitor)
         self.run_id = run_id

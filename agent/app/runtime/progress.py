@@ -15,7 +15,7 @@ class StepPrinter:
     def __call__(self, data: dict[str, Any]) -> None:
         for behaviour in data["behaviours"]:
             if behaviour["name"] not in ("QueryVLM", "UpdatePredictionSet", "QueryDirections", "Navigate",
-                                         "Answer", "AnswerFallback", "NothingLeftToExplore"):
+                                         "Answer", "AnswerFallback", "MarkExplorationComplete"):
                 continue
             if behaviour["status"] != "SUCCESS" or not behaviour["visited"]:
                 continue

@@ -17,12 +17,10 @@ from worlds.bus.keys import Keys, check_namespace
 from worlds.bus.rpc import QueryFailed
 from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.config import Config
-from agent.eqa.answers import AnswerLog
 from agent.eqa.calibration import CalibrationError
 from agent.app.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StopRuleName, StoppingRule, make_rule
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.semantic import method_flags, new_semantic_map
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
 from agent.app.runtime.plots import save_map_png
 from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
@@ -125,25 +123,10 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
               extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]]
               ) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
-    writer = py_trees.blackboard.Client(name="EpisodeSetup")
     start = tuple(float(v) for v in reset_meta["base_pose"])
-    initial = {
-        bb.QUESTION: scenario["question"],
-        bb.CHOICES: list(scenario["choices"]),
-        bb.BUDGET: config.episode.budget or int(scenario["budget"]),
-        bb.MAP: ExplorationMap(start[:2], config.map),
-        bb.ANSWER_LOG: AnswerLog(),
-        bb.TRAJECTORY: [start],
-        bb.PLAN: None,
-        bb.FRONTIER_GOAL: None,
-        bb.EXPLORATION_COMPLETE: False,
-    }
-    for key, value in initial.items():
-        writer.register_key(key, access=py_trees.common.Access.WRITE)
-        writer.set(key, value)
-    if method_flags(config.explore.method).use_semantic:
-        writer.register_key(bb.SEMANTIC_MAP, access=py_trees.common.Access.WRITE)
-        writer.set(bb.SEMANTIC_MAP, new_semantic_map(initial[bb.MAP].spec, config.explore.method, config.semantic_values))
+    writer = bb.seed_board(bb.EpisodeStart(scenario["question"], list(scenario["choices"]),
+                                           config.episode.budget or int(scenario["budget"]), start, config.map,
+                                           config.explore.strategy, config.semantic_values))
     parts = EqaTreeParts(link, vlm, config.explore, config.episode.vlm_timeout_s,
                          config.bus.move_timeout_s, timer, config.prompt_points, config.semantic_values,
                          config.frontier_weights, int(scenario["seed"]), folder / "prompts", stopping)
@@ -165,8 +148,7 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     outcome.extra["step_scores"] = [s.to_record() for s in log_of_steps.steps]
     writer.register_key(bb.PREDICTION_SET, access=py_trees.common.Access.READ)
     outcome.extra["prediction_set"] = writer.get(bb.PREDICTION_SET)
-    writer.register_key(bb.ACTS, access=py_trees.common.Access.READ)
-    outcome.extra["acts"] = writer.get(bb.ACTS) if writer.exists(bb.ACTS) else []
+    outcome.extra["acts"] = [act.to_record() for act in writer.get(bb.ACTS)]
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
     publisher.undeclare()
     events.undeclare()

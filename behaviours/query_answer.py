@@ -11,11 +11,11 @@ from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.observation import Observation
 from agent.timing import StageTimer
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
-from behaviours.vlm_query import VLMQuery
+from behaviours.async_vlm import AsyncVLMQuery
 from worlds.vocabulary import LETTERS
 
 
-class QueryVLM(VLMQuery):
+class QueryVLM(AsyncVLMQuery):
     def __init__(self, vlm: VisionLanguageModel, timeout_s: float = 30.0,
                  timer: StageTimer | None = None, name: str = "QueryVLM", view: str = bb.OBSERVATION) -> None:
         super().__init__(name, vlm, timeout_s, timer)

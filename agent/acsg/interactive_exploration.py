@@ -54,7 +54,7 @@ OPENABLE_PARTS = frozenset({"door", "drawer", "flap", "lid"})
 
 
 @dataclass(frozen=True)
-class ExploreConfig:
+class InteractiveExploreConfig:
     max_steps: int = 1000  # executed primitives before exploration gives up (truncated)
     reward_lambda: float = 0.1  # λ of R = ΔV + max(0, −ΔU) − λ, 0 < λ < 1
 
@@ -120,7 +120,7 @@ class Explorer:
     perception: Perception
     decision: DecisionModule
     executor: SkillExecutor
-    config: ExploreConfig = field(default_factory=ExploreConfig)
+    config: InteractiveExploreConfig = field(default_factory=InteractiveExploreConfig)
 
     def __post_init__(self) -> None:
         self.graph = ACSG()
@@ -327,6 +327,6 @@ class Explorer:
 
 
 def explore(perception: Perception, decision: DecisionModule, executor: SkillExecutor,
-            config: ExploreConfig | None = None) -> ExplorationResult:
+            config: InteractiveExploreConfig | None = None) -> ExplorationResult:
     """Explore until nothing is left to judge or do; see the module docstring for the order."""
-    return Explorer(perception, decision, executor, config or ExploreConfig()).run()
+    return Explorer(perception, decision, executor, config or InteractiveExploreConfig()).run()

@@ -11,9 +11,9 @@ from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import Candidates, ExploreConfig, plan_move, reachable_frontiers
+from agent.planning.frontier_plan import Candidates, ExploreConfig, plan_move, reachable_frontiers
 from agent.planning.frontier_choice import choose_frontier, kept_goal
-from agent.planning.semantic import ExploreMethod, FrontierWeightConfig, frontier_log_weights, method_flags
+from agent.planning.semantic import FrontierWeightConfig, frontier_log_weights
 from agent.timing import StageTimer
 
 if TYPE_CHECKING:
@@ -23,13 +23,13 @@ if TYPE_CHECKING:
 class SelectFrontier(py_trees.behaviour.Behaviour):
     """Writes a `MovePlan` toward a reachable frontier, or no plan when there is none.
 
-    It succeeds either way: "no frontier" is an answer, not a failure, and `NothingLeftToExplore`
+    It succeeds either way: "no frontier" is an answer, not a failure, and `MarkExplorationComplete`
     acts on it. Keeping the two apart means a move that fails later is reported as that failure.
 
     FBE takes the nearest frontier; the semantic methods sample one in proportion to its weight
     from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator;
     under the default rule both weigh the path length and keep to the frontier chosen until it is
-    reached or gone (`agent.planning.frontier_choice`, which keeps it in ``frontier_goal``); LFE plans over the shipped network's estimates with the steps left (`agent.lfe.explore`),
+    reached or gone (`agent.planning.frontier_choice`, which keeps it in ``frontier_goal``); LFE plans over the shipped network's estimates with the steps left (`agent.lfe.eqa_frontier`),
     loading the network on the first choice so that other methods never import torch.
     """
 
@@ -39,8 +39,8 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         super().__init__(name)
         self.config = config
         self.weights = weights
-        self.semantic = method_flags(config.method).use_semantic
-        self.learned = config.method == ExploreMethod.LFE
+        self.semantic = config.strategy.use_semantic
+        self.learned = config.strategy.learned
         self.estimator: LearnedEstimator | None = None
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.timer = timer
@@ -54,12 +54,13 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.OBSERVATION, access=Access.READ)
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
         self.blackboard.register_key(bb.FRONTIER_GOAL, access=Access.WRITE)
+        self.blackboard.register_key(bb.MAP_FIELDS, access=Access.WRITE)  # computes the map's fields once a step
 
     def update(self) -> Status:
         world_map = self.blackboard.get(bb.MAP)
         robot_xy = self.blackboard.get(bb.OBSERVATION).base_pose[:2]
         with self.timer.measure("planning") if self.timer else contextlib.nullcontext():
-            candidates = reachable_frontiers(world_map, robot_xy, self.config)
+            candidates = reachable_frontiers(world_map, robot_xy, self.config, self.blackboard.get(bb.MAP_FIELDS))
             centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]).reshape(-1, 2))
             earlier_goal = self.blackboard.get(bb.FRONTIER_GOAL)
             if self.learned:
@@ -93,7 +94,7 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
 
     def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
         from agent.lfe.estimator import LearnedEstimator
-        from agent.lfe.explore import lfe_frontier
+        from agent.lfe.eqa_frontier import lfe_frontier
 
         if self.estimator is None:
             self.estimator = LearnedEstimator.load()
@@ -108,7 +109,7 @@ class MarkExplorationComplete(py_trees.behaviour.Behaviour):
     move toward the planned frontier runs next.
     """
 
-    def __init__(self, name: str = "NothingLeftToExplore") -> None:
+    def __init__(self, name: str = "MarkExplorationComplete") -> None:
         super().__init__(name)
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.PLAN, access=Access.READ)

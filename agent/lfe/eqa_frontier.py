@@ -11,7 +11,7 @@ from __future__ import annotations
 from agent.lfe.bellman import Plan, choose_frontier
 from agent.lfe.estimator import LearnedEstimator
 from agent.mapping.occupancy import ExplorationMap
-from agent.planning.explore import Candidates
+from agent.planning.frontier_plan import Candidates
 
 
 def lfe_frontier(world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates,

@@ -4,18 +4,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from agent.mapping.occupancy import ExplorationMap
+from agent.planning.explore_method import ExploreMethod, ExploreStrategy
 from agent.planning.frontier_choice import FrontierChoiceConfig
 from agent.planning.frontier import Frontier, cluster_frontiers, frontier_cells
-from agent.planning.paths import DistanceField, clearance_cost, distance_field, simplify_path, truncate_path
+from agent.planning.map_fields import MapFields
+from agent.planning.paths import DistanceField, simplify_path, truncate_path
 
 
 @dataclass(frozen=True)
 class ExploreConfig:
-    method: str = "semantic"  # fbe, semantic, semantic-no-lsv, semantic-no-gsv or lfe (agent.planning.semantic)
+    method: str = "semantic"  # fbe, semantic, semantic-no-lsv, semantic-no-gsv or lfe (agent.planning.explore_method)
     max_step_m: float = 3.0  # path length the robot may drive between two observations
     min_frontier_distance_m: float = 0.5  # nearer frontiers are where the robot already stands
     min_frontier_size: int = 3
@@ -25,10 +28,14 @@ class ExploreConfig:
     choice: FrontierChoiceConfig = field(default_factory=FrontierChoiceConfig)  # which frontier to head for
 
     def __post_init__(self) -> None:
-        from agent.planning.semantic import ExploreMethod  # semantic builds on this module
-
         if self.method not in set(ExploreMethod):
             raise ValueError(f"explore.method: {self.method!r} is not one of {', '.join(ExploreMethod)}")
+
+    @cached_property
+    def strategy(self) -> ExploreStrategy:
+        """What ``method`` means, made once for this configuration; everything that depends on the
+        method asks this."""
+        return ExploreStrategy.of(self.method)
 
 
 @dataclass(frozen=True)
@@ -53,21 +60,21 @@ class MovePlan:
     goal_distance_m: float
 
 
-def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance: np.ndarray,
-                config: ExploreConfig = ExploreConfig(), squeeze_m: float = 0.0) -> tuple[DistanceField, np.ndarray]:
-    """Path costs from the robot over the cells it may drive (kept off walls where there is room),
-    and those cells; ``clearance`` is ``world_map.clearance()``, which callers often need too;
-    ``squeeze_m``: see `ExplorationMap.traversable`."""
-    start = tuple(int(v) for v in world_map.spec.to_cell(np.asarray(robot_xy)))
-    cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
-    traversable = world_map.traversable(robot_xy, clearance, squeeze_m)
-    return distance_field(world_map.spec, traversable, start, cell_cost), traversable
-
-
 def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float],
-                        config: ExploreConfig = ExploreConfig()) -> Candidates:
-    """Frontier clusters in the free space connected to the robot, nearer ones dropped."""
-    field, traversable = drive_field(world_map, robot_xy, world_map.clearance(), config)
+                        config: ExploreConfig = ExploreConfig(), fields: MapFields | None = None) -> Candidates:
+    """Frontier clusters in the free space connected to the robot, nearer ones dropped.
+
+    Args:
+        world_map: the robot's map.
+        robot_xy: where the robot stands (world x, y).
+        config: the exploration settings.
+        fields: the map's fields shared with other planners this step (computed afresh without).
+
+    Returns:
+        The frontiers, their path lengths and the field they were measured over.
+    """
+    fields = MapFields() if fields is None else fields
+    field, traversable = fields.drive_field(world_map, robot_xy, config)
     reachable = np.isfinite(field.metres)
     mask = frontier_cells(reachable, world_map.explored, world_map.occupied, config.min_unexplored_neighbours)
     frontiers = cluster_frontiers(world_map.spec, mask, world_map.explored, world_map.occupied, config.min_frontier_size)

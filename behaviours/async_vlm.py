@@ -1,7 +1,7 @@
 """A behaviour that asks the VLM in a worker thread and stays RUNNING until the answer is in.
 
 A remote model takes hundreds of milliseconds; the tick must not wait for it. `initialise` hands
-the question to a one-thread executor, `update` polls the future, fails with the reason on a
+the question to a one-thread executor (made in `setup`, shut down in `shutdown`), `update` polls the future, fails with the reason on a
 timeout or an error, and passes the answer to `use` when it arrives.
 """
 
@@ -18,7 +18,7 @@ from agent.timing import StageTimer
 from agent.vlm.protocol import VisionLanguageModel
 
 
-class VLMQuery(py_trees.behaviour.Behaviour):
+class AsyncVLMQuery(py_trees.behaviour.Behaviour):
     """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`."""
 
     stage = "vlm"
@@ -28,7 +28,7 @@ class VLMQuery(py_trees.behaviour.Behaviour):
         self.vlm = vlm
         self.timeout_s = timeout_s
         self.timer = timer
-        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vlm")
+        self._executor: ThreadPoolExecutor | None = None
         self._future: Future | None = None
         self._started = 0.0
 
@@ -44,8 +44,17 @@ class VLMQuery(py_trees.behaviour.Behaviour):
         """Record the answer (in the tick thread) and say how it went."""
         raise NotImplementedError
 
+    def setup(self, **kwargs: object) -> None:
+        """Make the executor the VLM is asked in.
+
+        Args:
+            **kwargs: py_trees' setup arguments, unused.
+        """
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vlm")
+
     def initialise(self) -> None:
         self._started = time.perf_counter()
+        assert self._executor is not None, f"{self.name}.setup() makes the executor the VLM is asked in"
         self._future = self._executor.submit(self.ask, *self.inputs())
 
     def update(self) -> Status:
@@ -74,4 +83,5 @@ class VLMQuery(py_trees.behaviour.Behaviour):
         self._future = None
 
     def shutdown(self) -> None:
-        self._executor.shutdown(wait=False, cancel_futures=True)
+        if self._executor is not None:
+            self._executor.shutdown(wait=False, cancel_futures=True)
