@@ -11,13 +11,14 @@ from pathlib import Path
 import pytest
 
 from worlds.bus.session import free_tcp_endpoint
-from agent.app.cli import _parser, main, shortcut_overrides
+from agent.app.cli import build_parser, main
+from agent.app.cli.run import shortcut_overrides
 from agent.app.config import load_config
 from worlds.suite import plan_split, read_suite, write_suite
 
 
 def test_method_stop_and_epsilon_become_settings() -> None:
-    args = _parser().parse_args(["run", "--method", "lfe", "--stop", "budget", "--epsilon", "0.2"])
+    args = build_parser().parse_args(["run", "--method", "lfe", "--stop", "budget", "--epsilon", "0.2"])
     overrides = shortcut_overrides(args)
     assert overrides == ["explore.method=lfe", "stop.rule=budget", "stop.epsilon=0.2"]
     config = load_config(None, overrides)
@@ -25,12 +26,12 @@ def test_method_stop_and_epsilon_become_settings() -> None:
 
 
 def test_options_left_out_change_nothing() -> None:
-    assert shortcut_overrides(_parser().parse_args(["run"])) == []
+    assert shortcut_overrides(build_parser().parse_args(["run"])) == []
 
 
 def test_an_unknown_stopping_rule_is_refused_at_the_command_line(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
-        _parser().parse_args(["run", "--stop", "never"])
+        build_parser().parse_args(["run", "--stop", "never"])
     assert "invalid choice: 'never'" in capsys.readouterr().err
 
 

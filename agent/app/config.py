@@ -1,7 +1,10 @@
 """One typed configuration with defaults, overridable from a TOML file and from the command line.
 
 Every value is checked against the type of its default, and a bad one is rejected with its full
-dotted name, e.g. ``config: map.resolution: expected a number, got 'fine'``.
+dotted name, e.g. ``config: map.resolution: expected a number, got 'fine'``. Each section is the
+settings class of the code it configures; ``act`` is the EQA tree's act branch (`LookInsideConfig`,
+with ``act.approach`` its `ApproachConfig` and ``act.stand`` the arm's stands), e.g.
+``--set act.approach.views=3``.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from agent.planning.frontier_plan import ExploreConfig
 from agent.planning.prompt_points import PromptPointConfig
 from agent.planning.semantic import FrontierWeightConfig
 from agent.vlm.settings import VLMSettings
+from behaviours.look_inside import LookInsideConfig
 
 
 class ConfigError(ValueError):
@@ -29,6 +33,8 @@ class ConfigError(ValueError):
 
 @dataclass(frozen=True)
 class CameraSettings:
+    """The head camera the world renders for the agent: image size in pixels, horizontal field of view."""
+
     width: int = 320
     height: int = 240
     hfov_deg: float = 90.0
@@ -36,6 +42,8 @@ class CameraSettings:
 
 @dataclass(frozen=True)
 class BusSettings:
+    """The agent's side of the wire: where `homebot watch` reaches it, and how long it waits on the world."""
+
     listen: tuple[str, ...] = ("tcp/127.0.0.1:7450",)
     query_timeout_s: float = 10.0
     move_timeout_s: float = 30.0
@@ -44,6 +52,8 @@ class BusSettings:
 
 @dataclass(frozen=True)
 class EpisodeSettings:
+    """An episode's limits: its step budget, wall time, tick period, and how long one VLM call may take."""
+
     budget: int = 0  # 0: the scenario's own budget, int(3·sqrt(area))
     max_seconds: float = 900.0
     tick_period_s: float = 0.002
@@ -73,6 +83,8 @@ class TreeSettings:
 
 @dataclass(frozen=True)
 class Config:
+    """Every setting of a run, one section per part of the agent; ``[section]`` in TOML, ``section.key`` with --set."""
+
     camera: CameraSettings = field(default_factory=CameraSettings)
     bus: BusSettings = field(default_factory=BusSettings)
     episode: EpisodeSettings = field(default_factory=EpisodeSettings)
@@ -83,12 +95,25 @@ class Config:
     frontier_weights: FrontierWeightConfig = field(default_factory=FrontierWeightConfig)
     vlm: VLMSettings = field(default_factory=VLMSettings)
     stop: StopConfig = field(default_factory=StopConfig)
+    act: LookInsideConfig = field(default_factory=LookInsideConfig)
     tree: TreeSettings = field(default_factory=TreeSettings)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:
-    """``base`` (default: the defaults), then the TOML file at ``path``, then ``key=value`` overrides
-    (values in JSON or bare)."""
+    """Settings for a run: ``base``, then a TOML file, then ``key=value`` overrides, later winning.
+
+    Args:
+        path: a TOML file of settings, its tables the sections (``[map.tsdf]``), or None.
+        overrides: ``dotted.key=value`` items, each value JSON or else a bare string.
+        base: the settings to start from (default: the defaults).
+
+    Returns:
+        The settings, every value type-checked and each section's own checks passed.
+
+    Raises:
+        ConfigError: an unreadable file, a malformed override, an unknown key or a bad value; the
+            text names the dotted key.
+    """
     config = base or Config()
     if path is not None:
         try:
@@ -105,7 +130,20 @@ def load_config(path: Path | None = None, overrides: list[str] | None = None, ba
 
 
 def merge(config: Any, data: dict[str, Any], prefix: str = "") -> Any:
-    """A copy of the dataclass ``config`` with ``data`` applied, each value type-checked."""
+    """Apply a nested table of values to a settings dataclass, checking each against its field's type.
+
+    Args:
+        config: a frozen settings dataclass (a section, or the whole `Config`).
+        data: field name -> value, a nested table for a field that is itself a dataclass; a table
+            given to a mapping field (``act.min_look``) updates the keys it names.
+        prefix: the dotted name of ``config`` with a trailing dot, for messages ("" at the top).
+
+    Returns:
+        A copy of ``config`` with the values applied.
+
+    Raises:
+        ConfigError: an unknown key, a value of the wrong type, or one the section's checks refuse.
+    """
     if not isinstance(data, dict):
         raise ConfigError(f"config: {prefix.rstrip('.') or 'top level'}: expected a table")
     fields = {f.name: f for f in dataclasses.fields(config)}
@@ -118,6 +156,8 @@ def merge(config: Any, data: dict[str, Any], prefix: str = "") -> Any:
         current = getattr(config, key)
         if dataclasses.is_dataclass(current):
             changes[key] = merge(current, value, f"{name}.")
+        elif isinstance(current, dict):
+            changes[key] = {**current, **_coerce(name, value, hints[key])}
         else:
             changes[key] = _coerce(name, value, hints[key])
     try:
@@ -143,9 +183,6 @@ def _coerce(name: str, value: Any, hint: Any) -> Any:
     elif dataclasses.is_dataclass(hint):
         if isinstance(value, dict):
             return merge(hint(), value, f"{name}.")
-    elif origin is dict:
-        if isinstance(value, dict) and all(isinstance(key, str) for key in value):
-            return dict(value)
     elif origin is tuple:
         args = typing.get_args(hint)
         if isinstance(value, (list, tuple)):
@@ -153,6 +190,13 @@ def _coerce(name: str, value: Any, hint: Any) -> Any:
                 return tuple(_coerce(f"{name}[{i}]", v, args[0]) for i, v in enumerate(value))
             if len(value) == len(args):
                 return tuple(_coerce(f"{name}[{i}]", v, a) for i, (v, a) in enumerate(zip(value, args)))
+    elif origin is dict:
+        key_type, value_type = typing.get_args(hint)
+        if isinstance(value, dict):
+            if value_type is Any:  # values a later check types (a skill's ports)
+                return {_coerce(f"{name} key", k, key_type): v for k, v in value.items()}
+            return {_coerce(f"{name} key", k, key_type): _coerce(f"{name}.{k}", v, value_type)
+                    for k, v in value.items()}
     type_name = getattr(hint, "__name__", str(hint)).replace("float", "number").replace("dict", "table")
     raise ConfigError(f"config: {name}: expected {type_name}, got {value!r}")
 

@@ -73,11 +73,11 @@ class StandConfig:
         for name in ("distances_m", "door_amounts", "drawer_amounts"):
             values = getattr(self, name)
             if not values or not all(v > 0 for v in values):
-                raise ValueError(f"stand.{name}: {values!r} must be one or more positive numbers")
+                raise ValueError(f"act.stand.{name}: {values!r} must be one or more positive numbers")
         if not self.hinge_shares or not all(0.0 <= s <= 1.0 for s in self.hinge_shares):
-            raise ValueError(f"stand.hinge_shares: {self.hinge_shares!r} must be one or more shares in [0, 1]")
+            raise ValueError(f"act.stand.hinge_shares: {self.hinge_shares!r} must be one or more shares in [0, 1]")
         if self.margin_m < 0 or self.max_plans < 1:
-            raise ValueError("stand.margin_m must be ≥ 0 and stand.max_plans ≥ 1")
+            raise ValueError("act.stand.margin_m must be ≥ 0 and act.stand.max_plans ≥ 1")
 
 
 class NoStandError(SkillPlanError):

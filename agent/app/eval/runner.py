@@ -42,7 +42,17 @@ class WorldAddress:
 
     @classmethod
     def parse(cls, text: str) -> WorldAddress:
-        """``tcp/host:port`` or ``namespace@tcp/host:port``, checked."""
+        """Read a world's address as the command line gives it.
+
+        Args:
+            text: ``tcp/host:port`` or ``namespace@tcp/host:port``.
+
+        Returns:
+            The address, under ``homebot/default`` when no namespace is given.
+
+        Raises:
+            ValueError: a malformed endpoint or namespace, named.
+        """
         namespace, sep, endpoint = text.strip().rpartition("@")
         return cls(check_endpoint(endpoint), check_namespace(namespace) if sep else "homebot/default")
 
@@ -59,16 +69,31 @@ class Job:
 
     @property
     def key(self) -> tuple[str, str]:
+        """(entry id, variant): what a results line is known by, so a rerun skips it."""
         return (self.entry_id, self.variant)
 
 
 def finished_keys(path: Path) -> set[tuple[str, str]]:
-    """The (entry id, variant) pairs already in a results file (a torn last line is ignored)."""
+    """The jobs a results file holds already, so a rerun can skip them.
+
+    Args:
+        path: a results file (JSON lines); it need not exist.
+
+    Returns:
+        The (entry id, variant) pairs of its whole lines (a torn last line is ignored).
+    """
     return {(result["id"], result["variant"]) for result in read_results(path)}
 
 
 def read_results(path: Path) -> list[dict[str, Any]]:
-    """Every whole result line of a results file; a torn line from an interrupted run is skipped."""
+    """Every result a results file holds, in file order.
+
+    Args:
+        path: a results file (JSON lines); a missing file holds none.
+
+    Returns:
+        The whole lines, parsed; a torn line from an interrupted run is skipped.
+    """
     results = []
     for line in path.read_text(encoding="utf-8").splitlines() if path.exists() else []:
         try:
@@ -81,10 +106,18 @@ def read_results(path: Path) -> list[dict[str, Any]]:
 def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Config,
              progress: Callable[[int, int, dict[str, Any]], None] | None = None,
              worlds: list[WorldAddress] | None = None) -> int:
-    """Run the jobs not yet in ``results_path``; return how many ran now.
+    """Run the jobs not yet in ``results_path`` in worker processes, appending each result as it ends.
 
-    Without ``worlds`` each of ``workers`` processes starts its own world; with them there is one
-    worker per listed world and ``workers`` is ignored.
+    Args:
+        jobs: the episodes to run.
+        results_path: the results file (JSON lines), created or appended to.
+        workers: how many worker processes, each starting its own world; ignored with ``worlds``.
+        base_config: the settings every job's overrides apply to.
+        progress: called after each episode with (done, of how many, its result).
+        worlds: running worlds to join instead, one worker each.
+
+    Returns:
+        How many jobs ran now (0 when the file held them all).
     """
     done = finished_keys(results_path)
     todo = [job for job in jobs if job.key not in done]
@@ -115,7 +148,14 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
 
 
 def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None]:
-    """A progress line on stderr, rewritten after each episode, with the time left at the pace so far."""
+    """A progress line on stderr, rewritten after each episode, with the time left at the pace so far.
+
+    Args:
+        started: `time.monotonic` when the episodes began.
+
+    Returns:
+        A ``progress`` callback for `run_jobs`.
+    """
 
     def progress(done: int, total: int, result: dict[str, Any]) -> None:
         rate = (time.monotonic() - started) / done
@@ -128,7 +168,15 @@ def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None
 
 
 def results_for(jobs: list[Job], results_path: Path) -> list[dict[str, Any]]:
-    """The results of exactly these jobs, in the jobs' order (other lines in the file are ignored)."""
+    """The results of exactly these jobs, for a report over them.
+
+    Args:
+        jobs: the jobs whose results are wanted.
+        results_path: the results file.
+
+    Returns:
+        Their results in the jobs' order; jobs without a line are left out, and other lines ignored.
+    """
     by_key = {(r["id"], r["variant"]): r for r in read_results(results_path)}
     return [by_key[job.key] for job in jobs if job.key in by_key]
 
@@ -141,31 +189,54 @@ def _repair_torn_tail(path: Path) -> None:
             path.write_text(text[: text.rfind("\n") + 1], encoding="utf-8")
 
 
-_WORKER: dict[str, Any] = {}
+@dataclass(frozen=True)
+class WorkerWorld:
+    """The world a worker process runs its episodes in: a listed running world it joined, or a
+    world child process of its own that stops when the worker exits.
+
+    Attributes:
+        namespace: the key prefix the world serves under.
+        endpoint: the Zenoh endpoint the world listens on.
+        scratch: where the worker's episodes put their run folders.
+    """
+
+    namespace: str
+    endpoint: str
+    scratch: Path
+
+
+#: This process's world while it is a pool worker of `run_jobs`: set once by the pool's initializer
+#: (`_start_worker_world`), read by each job (`_run_job`), None in any other process. A process
+#: pool hands what its initializer made to the jobs in no other way.
+_worker_world: WorkerWorld | None = None
 
 
 def _start_worker_world(config: Config, addresses: Any | None) -> None:
     """Worker initialiser: join the next listed world, or start a world child process for this
-    worker that stops when it exits."""
+    worker that stops when it exits; either becomes this process's `WorkerWorld`."""
+    global _worker_world
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)
     scratch = Path(tempfile.mkdtemp(prefix="homebot-eval-world-"))
     if addresses is not None:
         address: WorldAddress = addresses.get(timeout=10)
-        _WORKER.update(namespace=address.namespace, endpoint=address.endpoint, scratch=scratch)
+        _worker_world = WorkerWorld(address.namespace, address.endpoint, scratch)
         return
     namespace = f"homebot/eval-{os.getpid()}"
     endpoint = free_tcp_endpoint()
     world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log")
     atexit.register(world.stop)
-    _WORKER.update(namespace=namespace, endpoint=endpoint, world=world, scratch=scratch)
+    _worker_world = WorkerWorld(namespace, endpoint, scratch)
 
 
 def _run_job(job: Job, base_config: Config) -> dict[str, Any]:
     """One episode in this worker's world; any failure is a result with its reason, never a crash."""
     started = time.monotonic()
     config = load_config(overrides=list(job.overrides), base=base_config)
-    request = RunRequest(seed=job.seed, config=config, out_root=_WORKER["scratch"], connect=_WORKER["endpoint"],
-                         namespace=_WORKER["namespace"], run_id=f"{job.entry_id}-{job.variant}",
+    world = _worker_world
+    if world is None:
+        raise RuntimeError("_run_job runs in a worker of run_jobs, whose initializer gives it its world")
+    request = RunRequest(seed=job.seed, config=config, out_root=world.scratch, connect=world.endpoint,
+                         namespace=world.namespace, run_id=f"{job.entry_id}-{job.variant}",
                          scenario=job.scenario, save_map=False)
     try:
         result = run_episode(request)

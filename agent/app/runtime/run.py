@@ -129,7 +129,8 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
                                            config.explore.strategy, config.semantic_values))
     parts = EqaTreeParts(link, vlm, config.explore, config.episode.vlm_timeout_s,
                          config.bus.move_timeout_s, timer, config.prompt_points, config.semantic_values,
-                         config.frontier_weights, int(scenario["seed"]), folder / "prompts", stopping)
+                         config.frontier_weights, int(scenario["seed"]), folder / "prompts", stopping,
+                         act=config.act)
     publisher = session.declare_publisher(keys.agent_tree)
     events = session.declare_publisher(keys.agent_events)
     snapshot_log = SnapshotLog(folder / "snapshots.jsonl")

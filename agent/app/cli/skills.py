@@ -13,16 +13,17 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
+from agent.app.cli.options import Commands, add_config_options, load_settings
 from skills.context import SkillContext
 from skills.ports import PortError, PortedSkill
 from skills.registry import SkillError, SkillRegistry
 
 
-def add_skill_commands(commands: argparse._SubParsersAction) -> None:
+def add_command(commands: Commands) -> None:
     """Add ``skills`` and ``skill run`` to the command line.
 
     Args:
-        commands: the subparsers of ``homebot``.
+        commands: the `homebot` parser's commands.
     """
     listing = commands.add_parser("skills", help="list the installed skills (the homebot.skills entry points)")
     listing.add_argument("--json", action="store_true", help="print them as JSON")
@@ -40,6 +41,7 @@ def add_skill_commands(commands: argparse._SubParsersAction) -> None:
     run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default)")
     run.add_argument("--timeout", type=float, default=120.0, help="seconds the skill may run (default 120)")
     run.add_argument("--json", action="store_true", help="print the outcome as JSON")
+    add_config_options(run)
     run.set_defaults(handler=run_skill_command)
 
 
@@ -87,7 +89,6 @@ def _bindings(pairs: list[str]) -> dict[str, str]:
 
 def run_skill_command(args: argparse.Namespace) -> int:
     """``homebot skill run``: 0 when the skill succeeds, 1 when it fails, 2 when it cannot be made."""
-    from agent.app.config import load_config
     from agent.app.runtime.world_process import WorldProcess, WorldStartError
     from worlds.bus.keys import Keys, check_namespace
     from worlds.bus.link import WorldLink
@@ -101,7 +102,7 @@ def run_skill_command(args: argparse.Namespace) -> int:
     except (SkillError, PortError) as error:
         print(f"homebot skill run: {error}", file=sys.stderr)
         return 2
-    config = load_config(getattr(args, "config", None), getattr(args, "set", None))
+    config = load_settings(args)
     namespace = check_namespace(args.namespace or ("homebot/default" if args.connect else
                                                    f"homebot/skill-{time.strftime('%H%M%S')}"))
     endpoint = args.connect or free_tcp_endpoint()

@@ -1,0 +1,116 @@
+"""`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from agent.app.cli.options import Commands, add_config_options, load_settings
+
+
+def add_command(commands: Commands) -> None:
+    """Add ``bench`` and its four benchmarks with their options.
+
+    Args:
+        commands: the `homebot` parser's commands.
+    """
+    bench = commands.add_parser("bench", help="measure speed")
+    benches = bench.add_subparsers(dest="bench", required=True)
+    step = benches.add_parser("step", help="per-stage time of each step over one fixed episode")
+    add_config_options(step)
+    step.add_argument("--seed", type=int, default=0)
+    step.add_argument("--area", type=float, default=None, help="floor area of the home in m² (60..300)")
+    step.add_argument("--json", action="store_true", help="print the figures as JSON")
+    step.set_defaults(handler=_bench_step)
+    arm = benches.add_parser("skills", help="IK and trajectory computation times of the arm")
+    arm.add_argument("--n", type=int, default=100, help="random target poses (default 100)")
+    arm.add_argument("--seed", type=int, default=0)
+    arm.add_argument("--scenes", default="door-only:0,drawer-only:0",
+                     help="tabletop TASK:VARIANT explored by the robot to time every skill, comma separated "
+                          "(default door-only:0,drawer-only:0; 'none' for kinematics only)")
+    arm.add_argument("--json", action="store_true", help="print the figures as JSON")
+    arm.set_defaults(handler=_bench_skills)
+    plan = benches.add_parser("plan", help="LFE planning time per step against the number of frontiers")
+    plan.add_argument("--steps", type=int, default=200, help="steps explored in each home (default 200)")
+    plan.add_argument("--model", type=Path, default=None, help="a trained model (default: the shipped one)")
+    plan.add_argument("--json", action="store_true", help="print the figures as JSON")
+    plan.set_defaults(handler=_bench_plan)
+    world = benches.add_parser("world", help="generation, build and render speed for homes of 60, 150, 300 m²")
+    world.add_argument("--areas", default="60,150,300", help="floor areas in m², comma separated")
+    world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
+    world.add_argument("--json", action="store_true", help="print the figures as JSON")
+    world.set_defaults(handler=_bench_world)
+
+
+def _bench_world(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump, format_world_table
+    from worlds.scene_cli import bench_world
+
+    try:
+        areas = tuple(float(a) for a in args.areas.split(","))
+    except ValueError:
+        print(f"homebot bench world: --areas {args.areas!r}: expected numbers like 60,150,300", file=sys.stderr)
+        return 2
+    report = bench_world(areas, args.repeats)
+    print(dump(report) if args.json else format_world_table(report))
+    return 0
+
+
+def _bench_skills(args: argparse.Namespace) -> int:
+    from agent.app.bench import bench_skills, dump, format_skills_table
+
+    if args.n < 1:
+        print(f"homebot bench skills: --n must be at least 1, got {args.n}", file=sys.stderr)
+        return 2
+    try:
+        scenes = _tabletop_scenes(args.scenes)
+    except ValueError as error:
+        print(f"homebot bench skills: --scenes: {error}", file=sys.stderr)
+        return 2
+    report = bench_skills(args.n, args.seed, scenes)
+    print(dump(report) if args.json else format_skills_table(report))
+    return 0
+
+
+def _bench_plan(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump
+    from agent.app.eval.coverage import SEED_BASE, SIZES, home_area
+    from agent.app.bench.lfe import bench_plan, format_plan_table
+
+    if args.steps < 1:
+        print(f"homebot bench plan: --steps must be at least 1, got {args.steps}", file=sys.stderr)
+        return 2
+    homes = [(SEED_BASE + 1000 * band, home_area(size, SEED_BASE + 1000 * band)) for band, size in enumerate(SIZES)]
+
+    def progress(done: int, total: int, plans: int) -> None:
+        print(f"  home {done}/{total}: {plans} planning steps timed", file=sys.stderr, flush=True)
+
+    report = bench_plan(homes, args.model, args.steps, progress)
+    print(dump(report) if args.json else format_plan_table(report))
+    return 0
+
+
+def _tabletop_scenes(text: str) -> list[tuple[str, int]]:
+    """``"door-only:0,drawer-only:3"`` -> [("door-only", 0), ("drawer-only", 3)]; ``"none"`` -> []."""
+    from worlds.tabletop import TASKS, VARIANTS
+
+    if text.strip() == "none":
+        return []
+    scenes = []
+    for item in (part.strip() for part in text.split(",") if part.strip()):
+        task, _, variant = item.partition(":")
+        if task not in TASKS:
+            raise ValueError(f"{item!r}: unknown task {task!r} (known: {', '.join(TASKS)})")
+        if not variant.isdigit() or not 0 <= int(variant) < VARIANTS:
+            raise ValueError(f"{item!r}: the variant must be a number 0..{VARIANTS - 1}")
+        scenes.append((task, int(variant)))
+    return scenes
+
+
+def _bench_step(args: argparse.Namespace) -> int:
+    from agent.app.bench import bench_step, dump, format_step_table
+
+    report = bench_step(load_settings(args), args.seed, args.area)
+    print(dump(report) if args.json else format_step_table(report))
+    return 0
