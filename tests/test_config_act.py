@@ -37,7 +37,7 @@ def _tree_of(config: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> py
     try:
         with pytest.raises(_TreeBuilt):
             runtime._run_tree("act-settings", scenario, {"base_pose": [0.0, 0.0, 0.0]}, config, None, BudgetRule(),
-                              None, None, None, tmp_path, None, [])
+                              None, None, None, tmp_path, None, [], [])
         return build_eqa_tree(made[0])
     finally:
         py_trees.blackboard.Blackboard.clear()
