@@ -10,7 +10,7 @@ from py_trees.common import Access, Status
 from behaviours import blackboard as bb
 from agent.eqa.answers import AnswerLog
 from agent.eqa.stopping import StopDecision, fallback_decision
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 
 class ShouldStop(py_trees.behaviour.Behaviour):

@@ -12,7 +12,7 @@ from agent.observation import Observation
 from agent.timing import StageTimer
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
 from behaviours.async_vlm import AsyncVLMQuery
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 
 class QueryVLM(AsyncVLMQuery):

@@ -13,7 +13,7 @@ from agent.eqa.prompts import (
     read_quoted_question,
     relevance_prompt,
 )
-from worlds.vocabulary import PAD_CHOICE
+from worlds.bus.questions import PAD_CHOICE
 
 
 def test_add_numbers_steps_from_one_and_copies_scores() -> None:

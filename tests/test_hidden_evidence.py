@@ -17,7 +17,7 @@ from worlds.home import generate_home
 from worlds.robot import CameraConfig
 from worlds.scenario import make_scenario
 from worlds.sim import World
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 
 def _yes_case():

@@ -12,7 +12,8 @@ from worlds.freespace import clearance
 from worlds.home import HomeSpec, generate_home
 from worlds.questions import CATEGORY_SHARES, parse_question
 from worlds.scenario import START_CLEARANCE, Scenario, make_scenario
-from worlds.vocabulary import LETTERS, PAD_CHOICE, ROOM_TYPES, room_kind
+from worlds.vocabulary import ROOM_TYPES, room_kind
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 SEEDS = range(120)
 

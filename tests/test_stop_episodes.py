@@ -22,7 +22,7 @@ from agent.app.runtime.calibrations import made_with, shipped_calibration, write
 from agent.eqa.stopping import ConformalRule, RelevanceRule, replay
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from worlds.suite import plan_split, write_suite
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 
 def _config(*overrides: str) -> Config:

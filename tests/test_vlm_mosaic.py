@@ -11,7 +11,7 @@ from agent.observation import InstanceLabel, Observation
 from agent.vlm.mosaic import side_by_side
 from agent.vlm.protocol import VisualQuery
 from agent.vlm.sim import SimParams, SimulatedVLM
-from worlds.vocabulary import LETTERS, PAD_CHOICE
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 CABINET = InstanceLabel(3, "cabinet", "white", state="open")
 HAMMER = InstanceLabel(9, "hammer", "grey", inside="cabinet")

@@ -15,7 +15,7 @@ from agent.mapping.camera import Intrinsics
 from agent.observation import InstanceLabel, Observation, ObservationError
 from agent.vlm.protocol import VisualQuery
 from agent.vlm.sim import SimParams, SimulatedVLM
-from worlds.vocabulary import LETTERS, PAD_CHOICE
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 H, W = 48, 64
 INTRINSICS = Intrinsics(W, H, 32.0, 32.0, 32.0, 24.0)

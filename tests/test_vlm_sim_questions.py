@@ -13,7 +13,7 @@ from agent.observation import InstanceLabel, Observation
 from agent.vlm import commonsense
 from agent.vlm.protocol import VisualQuery
 from agent.vlm.sim import SimParams, SimulatedVLM
-from worlds.vocabulary import LETTERS, PAD_CHOICE
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 H, W = 60, 80
 INTRINSICS = Intrinsics(W, H, 40.0, 40.0, 40.0, 30.0)

@@ -20,7 +20,7 @@ from worlds.scenario import Scenario
 from worlds.spec import load_spec
 from worlds.spec_fields import SpecError
 from worlds.tabletop import TASKS
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 MAX_WAYPOINTS = 500
 #: Waypoints further than this from the origin are certainly a mistake (homes are ~10 m across).

@@ -28,7 +28,8 @@ from worlds.freespace import clearance, free_space
 from worlds.home import HomeSpec
 from worlds.questions import CATEGORY_SHARES, ON_OFF, OPEN_CLOSED, TEMPLATES, YES_NO, Template, format_question
 from worlds.robot import ROBOT_RADIUS
-from worlds.vocabulary import COLOURS, LETTERS, OBJECTS, PAD_CHOICE, ROOM_TYPES
+from worlds.vocabulary import COLOURS, OBJECTS, ROOM_TYPES
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 #: The start pose keeps at least this much space to walls, furniture and floor objects.
 START_CLEARANCE = 0.5

@@ -190,6 +190,3 @@ ESSENTIALS: dict[str, tuple[str, ...]] = {
     "garage": ("workbench", "cabinet"),
     "laundry room": ("washing machine", "cabinet"),
 }
-
-PAD_CHOICE = "(Do not choose this option)"
-LETTERS = ("A", "B", "C", "D")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 ANSWER_SUFFIX = "Answer with the option's letter from the given choices directly."
 RELEVANCE_TEMPLATE = (

@@ -28,7 +28,7 @@ from agent.eqa.prompts import YES_NO, answer_prompt, relevance_prompt
 from agent.observation import Observation
 from agent.vlm.protocol import VisionLanguageModel, VisualQuery
 from agent.vlm.sim import SimulatedVLM
-from worlds.vocabulary import LETTERS, PAD_CHOICE
+from worlds.bus.questions import LETTERS, PAD_CHOICE
 
 
 @dataclass(frozen=True)

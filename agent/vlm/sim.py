@@ -43,7 +43,7 @@ from agent.vlm.sim_evidence import NONE, Evidence, evidence
 from agent.vlm.sim_frame import FrameTake
 from agent.vlm.sim_params import SimParams
 from worlds.questions import ParsedQuestion, parse_question
-from worlds.vocabulary import PAD_CHOICE
+from worlds.bus.questions import PAD_CHOICE
 
 __all__ = ["SimParams", "SimulatedVLM"]
 

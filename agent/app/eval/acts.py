@@ -28,7 +28,7 @@ from agent.app.config import load_config
 from agent.eqa.answers import steps_from_records
 from agent.app.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StoppingRule, make_rule, replay
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 #: (pattern in a failure's reason, the cause it names), first match wins.
 CAUSES: tuple[tuple[str, str], ...] = (

@@ -32,7 +32,7 @@ from agent.eqa.stopping import (BudgetRule, ConformalRule, EntropyRule, Relevanc
                                 replay)
 from agent.app.eval.calibrate import full_budget_jobs, run_full_budget
 from agent.app.eval.runner import WorldAddress
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 # The paper's Fig. 9 sweeps its "ε" (a confidence level, ours is 1 − ε) from 0.27 to 0.99, the
 # entropy threshold from 0.08 to 0.001 and the relevance threshold from 0.1 to 0.99. The entropy

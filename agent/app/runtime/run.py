@@ -33,7 +33,7 @@ from agent.vlm.errors import VLMError
 from agent.vlm.protocol import VisionLanguageModel
 from behaviours.eqa_tree import EqaTreeParts, build_eqa_tree
 from skills.ports import PortedSkill
-from worlds.vocabulary import LETTERS
+from worlds.bus.questions import LETTERS
 
 log = logging.getLogger(__name__)
 
