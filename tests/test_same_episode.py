@@ -1,12 +1,13 @@
 """Same seed, same episode: whole episodes, digested, hold the robot's behaviour fixed.
 
-Each case runs a real episode (world process, Zenoh, the tree) and digests what it decided and
+Each EQA case runs a real episode (world process, Zenoh, the tree) and digests what it decided and
 what the world's evaluator saw: every step's answer probabilities and relevance, the answer and
 why, what was opened, the floor seen after every frame, the path driven. A digest that changes
 means the robot now behaves differently for the same seed: that is either a bug in a change meant
 to keep behaviour (a refactor), or an intended change, and then the shipped calibration is remade
 and the digest here updated in the same commit. Timings, run ids and tick counts (which depend on
-the machine's speed) are left out.
+the machine's speed) are left out. Beside them: a scenario suite's first lines, and one episode
+of the shipped calibration replayed against the scores the file holds.
 """
 
 from __future__ import annotations
@@ -19,11 +20,14 @@ from typing import Any
 import pytest
 
 from agent.app.config import load_config
+from agent.app.eval.calibrate import FULL_BUDGET
+from agent.app.runtime.calibrations import SHIPPED_DIR
 from agent.app.eval.robot_tabletop import run_robot
 from agent.app.runtime.run import RunRequest, run_episode
 from worlds.home import generate_home
 from worlds.bus.session import free_tcp_endpoint
 from worlds.scenario import make_scenario
+from worlds.suite import suite_line
 
 pytestmark = pytest.mark.slow
 
@@ -34,6 +38,8 @@ EPISODES = {
     "lfe": (7, ["explore.method=lfe", "episode.budget=8", "stop.rule=budget"], False, "1f075f5d09d4aa87"),
     "hidden": (60, [], True, "606fdecd94843cec"),
 }
+#: A shipped calibration episode (the shortest of the first sixty) and the suite part it came from.
+CALIBRATION, CALIBRATION_EPISODE, CALIBRATION_PART = "calibration-semantic-sim.json", "calib-0011", ("calib", 11)
 #: tabletop task and variant -> digest of the robot's exploration (Table I's executor)
 TABLETOP = {("recursive", 0): "5b8264ab7c8f062c", ("drawer-door", 1): "b9a05ee11a131494"}
 
@@ -65,6 +71,27 @@ def test_an_eqa_episode_decides_as_it_always_has(name: str, tmp_path: Path) -> N
     decided = {key: result[key] for key in _DECIDED}
     assert result["status"] == "answered", result["reason"]
     assert _digest(decided) == expected, json.dumps(_without_timings(decided))[:4000]
+
+
+def test_suites_are_written_as_they_always_were() -> None:
+    """The first lines of the calibration suite the shipped calibration was run on, digested."""
+    lines = [json.dumps(suite_line(seed, "calib", index, hidden=False), ensure_ascii=False)
+             for index, seed in enumerate(range(20000, 20003))]
+    assert hashlib.sha256("\n".join(lines).encode()).hexdigest()[:16] == "5bd7cf8951607420"
+
+
+def test_a_shipped_calibration_episode_scores_as_the_file_says(tmp_path: Path) -> None:
+    """The conformal threshold q̂ stands on the shipped episodes' scores: replayed now, one of
+    them must give the same answer probabilities and relevance at every step."""
+    shipped = json.loads((SHIPPED_DIR / CALIBRATION).read_text())
+    [episode] = [e for e in shipped["episodes"] if e["id"] == CALIBRATION_EPISODE]
+    part, index = CALIBRATION_PART
+    entry = suite_line(episode["seed"], part, index, hidden=False)  # the suite was made with --hidden never
+    assert entry["id"] == episode["id"]
+    listen = f'bus.listen=["{free_tcp_endpoint()}"]'
+    result = run_episode(RunRequest(episode["seed"], load_config(None, [FULL_BUDGET, listen]), out_root=tmp_path,
+                                    scenario=entry["scenario"], save_map=False))
+    assert result["step_scores"] == episode["step_scores"]
 
 
 @pytest.mark.parametrize("task, variant", sorted(TABLETOP))
