@@ -196,6 +196,10 @@ class PortedSkill(py_trees.behaviour.Behaviour):
                 return MappingProxyType(values), f"{error} (read from {key!r})"
         return MappingProxyType(values), ""
 
+    def bound_keys(self) -> frozenset[str]:
+        """The blackboard keys the ports are bound to."""
+        return frozenset(self._keys.values())
+
     def input_problem(self) -> str:
         """Why the inputs could not be read as the skill started ("" when they were)."""
         return self._input_problem

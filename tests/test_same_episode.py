@@ -70,6 +70,7 @@ def test_an_eqa_episode_decides_as_it_always_has(name: str, tmp_path: Path) -> N
                                     save_map=False))
     decided = {key: result[key] for key in _DECIDED}
     assert result["status"] == "answered", result["reason"]
+    assert "contract_problems" not in result  # every key on the board as behaviours/blackboard.py says
     assert _digest(decided) == expected, json.dumps(_without_timings(decided))[:4000]
 
 

@@ -150,6 +150,11 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     writer.register_key(bb.PREDICTION_SET, access=py_trees.common.Access.READ)
     outcome.extra["prediction_set"] = writer.get(bb.PREDICTION_SET)
     outcome.extra["acts"] = [act.to_record() for act in writer.get(bb.ACTS)]
+    bound = frozenset().union(*(skill.bound_keys() for _, skill in plugged))
+    problems = bb.contract_problems(py_trees.blackboard.Blackboard.storage, bound)
+    if problems:  # a leaf that wrote what the contract does not say: a bug to see, not to hide
+        log.error("the blackboard breaks the EQA tree's contract: %s", "; ".join(problems))
+        outcome.extra["contract_problems"] = problems
     events.put(json.dumps({"event": "ended", "run": run_id, **asdict(outcome)}, default=str))
     publisher.undeclare()
     events.undeclare()
@@ -219,4 +224,5 @@ def _outcome_fields(outcome: EpisodeOutcome, result: dict[str, Any]) -> dict[str
         "acts": outcome.extra.get("acts", []),
         "ticks": outcome.ticks,
         "seconds": round(outcome.seconds, 3),
+        **({"contract_problems": outcome.extra["contract_problems"]} if "contract_problems" in outcome.extra else {}),
     }
