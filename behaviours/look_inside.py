@@ -283,7 +283,7 @@ class LookInside(py_trees.behaviour.Behaviour):
             state.tried.add(part.id)
             part_views, record = self._open_one(state, robot, kind, part, piece, look_first=not records)
             records.append(record)
-            before = before or robot.before
+            before = before or robot.parts.before
             if part_views:
                 views.append(_view_for_vlm(part_views))
             if (record.closed is False or record.stage in ("look", "stow") or len(records) >= self.config.max_parts
@@ -311,17 +311,17 @@ class LookInside(py_trees.behaviour.Behaviour):
             if look_first:
                 robot.observe()
             stage = "open"
-            opened = robot.open_part(part)
-            amount = robot.opening(part)
+            opened = robot.parts.open_part(part)
+            amount = robot.parts.opening(part)
             record.opened = opened.ok
             record.opening = round(math.degrees(amount) if unit == "opening_deg" else amount, 3)
             if not opened.ok:
                 record.stage, record.reason = stage, opened.reason
             if amount >= self.config.min_look[part.label]:
-                views = list(robot.views)
+                views = list(robot.parts.views)
             if amount > 0:
                 stage = "close"
-                closed = robot.close_part(part)
+                closed = robot.parts.close_part(part)
                 record.closed = closed.ok
                 if not closed.ok:
                     record.fail(stage, closed.reason)

@@ -103,5 +103,5 @@ def test_the_check_sees_an_upward_import() -> None:
     """The reader finds what a module imports, absolute and from-imports alike."""
     imports = _imports()
     assert "worlds.bus.codec" in imports["worlds.server"]
-    assert "skills.arm.planner" in imports["skills.robot"]
+    assert "skills.arm.planner" in imports["skills.robot_body"]
     assert len(imports) > 150

@@ -1,0 +1,235 @@
+"""The robot's body over the world link: running skills, taking frames, driving the base, and the
+tables and counters it remembers.
+
+What the scene-graph executor (`skills.robot.Robot`) and its handling of doors, drawers and picks
+share: the `SkillContext` the skills run in, the `SkillRegistry` that makes them by name, where the
+base stands as the world last said (``pose``), where the robot first looked (``home``, set by
+`skills.robot.Robot.observe`), the head camera's position (``eye``) and every skill run's name,
+outcome and timings (``skill_times``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, TypeVar
+
+import numpy as np
+
+from agent.observation import Observation
+from agent.perception.instances import Instance
+from agent.perception.memory import InstanceMemory
+from agent.planning.route import Routes
+from agent.pose import Pose2D
+from skills.arm.planner import ArmPlanner
+from skills.arm.skill_plan import SkillPlanError
+from skills.base import SkillResult as ArmResult
+from skills.context import SkillContext
+from skills.registry import SkillRegistry
+from skills.replies import arm_state
+from skills.running import run_to_end
+from worlds.bus.link import WorldLink
+
+SURFACE_LABELS = ("table", "counter")
+#: The skills the robot runs besides the exploration primitives, by their registered names.
+LOOK, STOW = "move_camera", "stow"
+#: A hand folding in from where it is may swing this far (m) out and down on the way.
+FOLD_REACH_M = 0.3
+
+Record = TypeVar("Record")
+
+
+class RobotBody:
+    """The robot behind ``link`` as the skills see it: one skill run at a time, head and wrist
+    frames fused into ``memory``, and base moves.
+
+    Args:
+        link: the world link.
+        memory: the instance memory every frame is fused into.
+        skills: the registry the skills are made from by name.
+        skill_timeout_s: how long one skill may run.
+    """
+
+    def __init__(self, link: WorldLink, memory: InstanceMemory, skills: SkillRegistry,
+                 skill_timeout_s: float) -> None:
+        self.link = link
+        self.memory = memory
+        self.skills = skills
+        self.skill_timeout_s = skill_timeout_s
+        self.context = SkillContext(link)
+        self.home: Pose2D | None = None  # where the robot first looked (`skills.robot.Robot.observe`)
+        self.pose: Pose2D | None = None  # where the base is, as the world last said
+        self.eye = np.zeros(3)  # the head camera's position at its last frame
+        self.head_sees_from = 0.0  # how far ahead of the start pose the head camera sees the table's top
+        self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
+
+    def run(self, name: str, **bindings: Any) -> ArmResult:
+        """Make the skill registered as ``name`` with ``bindings`` for its ports and run it to its
+        end; on a failure after the arm moved, fold it away. The run is kept in `skill_times`.
+
+        Args:
+            name: the skill's registered name.
+            **bindings: port name -> value.
+
+        Returns:
+            The skill's result.
+        """
+        began = time.perf_counter()
+        skill = self.skills.create(name, self.context, bindings)
+        result = run_to_end(skill, timeout_s=self.skill_timeout_s)
+        self.skill_times.append({"skill": name, "ok": result.ok, "planning_ms": round(result.planning_ms, 2),
+                                 "execution_s": round(result.execution_s, 3),
+                                 "wall_s": round(time.perf_counter() - began, 3),
+                                 **({} if result.ok else {"reason": result.reason})})
+        if not result.ok and name != STOW and (result.steps_done or result.execution_s > 0):
+            self.run(STOW, surface_z=bindings.get("surface_z"))  # out of the way
+        return result
+
+    def look(self, camera: str) -> Observation:
+        """One frame of ``camera``, fused into the memory.
+
+        Args:
+            camera: ``"head"`` or ``"wrist"``.
+
+        Returns:
+            The frame.
+        """
+        observation = self.frame(camera)
+        self.memory.integrate(observation)
+        return observation
+
+    def frame(self, camera: str) -> Observation:
+        """One frame of ``camera``, not yet fused into the memory; it updates `pose` (and, for the
+        head camera, `eye`).
+
+        Args:
+            camera: ``"head"`` or ``"wrist"``.
+
+        Returns:
+            The frame.
+        """
+        observation = Observation.from_message(self.link.call("observe", {"camera": camera}))
+        self.pose = Pose2D.of(observation.base_pose)
+        if camera == "head":
+            self.eye = observation.camera_to_world[:3, 3].copy()
+        return observation
+
+    def planner(self) -> ArmPlanner:
+        """The arm's planner, from the robot's description (asked for once, shared with the skills).
+
+        Returns:
+            The planner.
+        """
+        if self.context.planner is None:
+            self.context.planner = ArmPlanner.from_description(self.link.describe().wait().meta)
+        return self.context.planner
+
+    def drive(self, pose: Pose2D, routes: Routes | None = None, *, may_fold: bool = True) -> None:
+        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
+        The arm is left where the last skill left it (backed off ahead of the base), which the
+        world checks on the way; when it touches something, it is folded in and the base drives
+        on from where it stopped, unless ``may_fold`` is false: a door this robot opened still
+        stands open, it swings out towards the robot, and the folding arm would sweep through it
+        (the drive fails then, as it would have). Folding it first every time would do the same.
+
+        Args:
+            pose: where the base is to stand.
+            routes: paths over the robot's map, or None to drive straight.
+            may_fold: whether the arm may be folded in when it touches something on the way.
+
+        Raises:
+            SkillPlanError: the base did not get there.
+        """
+        reply = self._move_base(pose, routes)
+        if not reply.get("reached") and may_fold:
+            arm = arm_state(self.link.call("arm_state", {}).meta)
+            if not arm["stowed"]:
+                self.run(STOW, surface_z=self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M))
+                reply = self._move_base(pose, routes)
+        if not reply.get("reached"):
+            touched = (reply.get("contact") or {}).get("category", "something")
+            raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
+                                 f"{math.degrees(pose[2]):.0f}°): it touched {touched}")
+
+    def _move_base(self, pose: Pose2D, routes: Routes | None) -> dict[str, Any]:
+        """One move_base command towards ``pose`` (see `drive`); the world's reply."""
+        path = [[pose[0], pose[1]]]
+        here = self.pose
+        if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
+                and routes.reaches(np.array(pose[:2])):
+            path = np.round(routes.to(np.array(pose[:2]))[1:], 3).tolist()
+        reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": pose[2]}).meta
+        if isinstance(reply.get("base_pose"), list):
+            self.pose = Pose2D.of(reply["base_pose"])
+        return reply
+
+    def surfaces(self) -> list[Instance]:
+        """Every remembered table and counter.
+
+        Returns:
+            The tables, then the counters, in the memory's order.
+        """
+        return [inst for label in SURFACE_LABELS for inst in self.memory.with_label(label)]
+
+    def surface(self, under: np.ndarray, reach_m: float = 0.0) -> Instance | None:
+        """The highest table or counter below the point ``under`` (its top lower) whose footprint
+        comes within ``reach_m`` of it.
+
+        Args:
+            under: a point in the world frame.
+            reach_m: by default 0, the one under it, what the hand must keep above there; with
+                `FOLD_REACH_M`, what a hand folding in from there may swing down onto, though it
+                is not over it now.
+
+        Returns:
+            The surface, or None on the floor (a cabinet standing in a room).
+        """
+        found = []
+        for inst in self.surfaces():
+            lo, hi = inst.bounds
+            gap = np.maximum(np.maximum(lo[:2] - under[:2], under[:2] - hi[:2]), 0.0)
+            top = surface_top(inst)
+            if float(np.linalg.norm(gap)) <= reach_m and top < under[2]:
+                found.append((top, inst))
+        return max(found, key=lambda pair: pair[0], default=(None, None))[1]
+
+    def surface_z(self, under: np.ndarray, reach_m: float = 0.0) -> float | None:
+        """The height of the top of `surface` (``under``, ``reach_m``).
+
+        Args:
+            under: a point in the world frame.
+            reach_m: see `surface`.
+
+        Returns:
+            The top's height, or None on the floor.
+        """
+        surface = self.surface(under, reach_m)
+        return None if surface is None else surface_top(surface)
+
+    def remembered(self, records: dict[int, Record], inst: Instance) -> Record | None:
+        """What ``records`` holds for ``inst``, under its id or an id the memory has since merged into
+        it (the drawer seen open is the drawer that was closed); re-keyed to its id.
+
+        Args:
+            records: instance id -> what the robot keeps about it.
+            inst: the instance.
+
+        Returns:
+            Its record, or None.
+        """
+        for key in list(records):
+            if key != inst.id and self.memory.get(key).id == inst.id:
+                records[inst.id] = records.pop(key)
+        return records.get(inst.id)
+
+
+def surface_top(surface: Instance) -> float:
+    """The height of a table's or counter's top: the 99th percentile of its points' heights.
+
+    Args:
+        surface: a remembered table or counter.
+
+    Returns:
+        The height (m).
+    """
+    return float(np.percentile(surface.points()[:, 2], 99))

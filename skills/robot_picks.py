@@ -1,0 +1,158 @@
+"""Picking things away out of the way and back to where they stood, with the robot's body.
+
+- pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
+  the doors and drawers sweep as they open and of the lanes to their handles:
+  `agent.acsg.keep_clear`), the base slid along the table's edge (the robot faces the table along
+  +y, as the tabletop scenes start it) to where the arm reaches both the object and the spot
+  (`PLACE_REACH_M`), level with the object where it can;
+- pick back: from where it was put down to where it was.
+
+The box a thing filled before it was picked away is kept while it is away (``vacated``): what is
+found there lay inside it (the Matryoshka's smaller doll).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from agent.acsg.from_memory import Box
+from agent.acsg.interfaces import SkillResult
+from agent.acsg.keep_clear import kept_clear
+from agent.perception.grasp_poses import top_grasp_point
+from agent.perception.instances import Instance
+from agent.pose import Pose2D
+from skills.arm.idle_space import idle_spot, reach_along
+from skills.arm.skill_plan import SkillPlanError
+from skills.robot_body import RobotBody
+
+#: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
+#: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
+#: along the table's edge to a stand from which both lie within this.
+PLACE_REACH_M = 0.8
+
+
+@dataclass(frozen=True)
+class Away:
+    """A thing this robot picked away: its top grasp point where it stood (``grasp_point``), where
+    that point was put down (``placed_point``), its ``extent``, and the base's x along the table's
+    edge when it was picked (``stand_x``)."""
+
+    grasp_point: np.ndarray
+    placed_point: np.ndarray
+    extent: np.ndarray
+    stand_x: float
+
+
+class Picks:
+    """Picks things of what ``body`` remembers away and back, and keeps what is away.
+
+    Args:
+        body: the robot's body.
+        idle_toward_robot_m: how far from the object, towards the robot, the idle spot is sought first.
+        may_fold: whether the arm may fold in when the base touches something on a drive (see
+            `RobotBody.drive`), asked at each drive.
+    """
+
+    def __init__(self, body: RobotBody, idle_toward_robot_m: float, may_fold: Callable[[], bool]) -> None:
+        self.body = body
+        self.idle_toward_robot_m = idle_toward_robot_m
+        self.may_fold = may_fold
+        self.away: dict[int, Away] = {}
+        self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
+
+    def pick_away(self, obj: Instance) -> SkillResult:
+        """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
+        there is one, in the head camera's view.
+
+        Args:
+            obj: the thing to move out of the way.
+
+        Returns:
+            Whether it was put down there, and why not.
+
+        Raises:
+            SkillPlanError: the robot has not looked yet (no `RobotBody.home`), there is no surface
+                under it or no free spot, or the base did not get to its stand.
+        """
+        body = self.body
+        if body.home is None:
+            raise SkillPlanError("the robot has not looked yet")
+        points = obj.points()
+        top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
+        surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
+        if surface is None:
+            raise SkillPlanError("no table or counter in memory to put the object down on")
+        others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
+        toward = np.asarray(body.home[:2]) - top[:2]
+        near = top[:2] + self.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
+        edge_y = body.home[1]
+        (grasp_lo,), (grasp_hi,) = reach_along(top[:2], edge_y, PLACE_REACH_M)
+        if grasp_lo > grasp_hi:  # further out than that: from level with it, straight ahead, if at all
+            grasp_lo = grasp_hi = float(top[0])
+
+        def reachable(places: np.ndarray) -> np.ndarray:
+            lo, hi = reach_along(places, edge_y, PLACE_REACH_M)
+            return np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)
+
+        def in_view(places: np.ndarray) -> np.ndarray:
+            return reachable(places) & (places[:, 1] - edge_y >= body.head_sees_from)
+
+        obstacles, radius = [*others, *kept_clear(body.memory, body.eye, body.home[:2])], float(max(extent[:2])) / 2
+        try:  # where the head camera sees it, so the memory follows it; else before the robot
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=in_view,
+                             allowed_means="within the arm's reach and the head camera's view")
+        except SkillPlanError:
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+                             allowed_means="within the arm's reach")
+        (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
+        stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
+        body.drive(Pose2D(stand_x, edge_y, body.home.yaw), may_fold=self.may_fold())
+        place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
+        result = body.run("pick_away", object_point=top, object_extent=extent, place_point=place,
+                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}")
+        if not result.ok:
+            return SkillResult(False, result.reason)
+        body.memory.move(obj.id, _translation(place - top))
+        self.away[obj.id] = Away(top, place, extent, stand_x)
+        self.vacated[obj.id] = box
+        return SkillResult(True)
+
+    def pick_back(self, obj: Instance) -> SkillResult:
+        """Put ``obj``, picked away by this robot, back where it stood.
+
+        Args:
+            obj: the thing picked away.
+
+        Returns:
+            Whether it is back, and why not.
+
+        Raises:
+            SkillPlanError: the base did not get to the stand it was picked from.
+        """
+        body = self.body
+        away = body.remembered(self.away, obj)
+        if away is None:
+            return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
+        assert body.home is not None  # set by the look before the pick away
+        body.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw), may_fold=self.may_fold())
+        points = obj.points()
+        now = top_grasp_point(points) if len(points) else away.placed_point
+        result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
+                          surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
+                          label=f"{obj.label} {obj.id}")
+        if not result.ok:
+            return SkillResult(False, result.reason)
+        body.memory.move(obj.id, _translation(away.grasp_point - now))
+        del self.away[obj.id]
+        body.remembered(self.vacated, obj)
+        self.vacated.pop(obj.id, None)
+        return SkillResult(True)
+
+
+def _translation(offset: np.ndarray) -> np.ndarray:
+    motion = np.eye(4)
+    motion[:3, 3] = offset
+    return motion
