@@ -24,6 +24,7 @@ was revealed and nothing else.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -47,6 +48,8 @@ from skills.robot_parts import DoorsAndDrawers
 from skills.robot_picks import Picks
 from worlds.bus.link import WorldLink
 from worlds.bus.rpc import QueryFailed
+
+log = logging.getLogger(__name__)
 
 #: The table-edge scan (`Robot.scan_table_edge`): the wrist camera's height over the top, how far
 #: apart its views are across the table, how far to either side of the base they go (m), and how
@@ -94,7 +97,6 @@ class Robot:
         self.body = RobotBody(self.link, self.memory, self.skills, config.skill_timeout_s)
         self.parts = DoorsAndDrawers(self.body, self.routes, config.look_inside, config.stand, config.hold_open)
         self.picks = Picks(self.body, config.idle_toward_robot_m, self.parts.may_fold)
-        self.notes: list[str] = []
 
     @property
     def home(self) -> Pose2D | None:
@@ -126,7 +128,7 @@ class Robot:
             try:
                 self.return_home()
             except SkillPlanError as error:  # look from where it stands rather than not at all
-                self.notes.append(f"observe: {error}")
+                log.warning("observe: looking from where the robot stands: %s", error)
         head = body.frame("head")
         if first:
             body.home = body.pose
