@@ -29,11 +29,25 @@ class WorldCommand(py_trees.behaviour.Behaviour):
         self._request_error: str | None = None
 
     def request(self) -> dict[str, Any]:
-        """The command's metadata; raise ValueError if it cannot be formed."""
+        """The command's metadata; raise ValueError if it cannot be formed.
+
+        Returns:
+            The command's metadata (empty by default).
+
+        Raises:
+            ValueError: the command cannot be formed from the blackboard.
+        """
         return {}
 
     def on_reply(self, message: Message) -> Status:
-        """Use the reply; return the behaviour's status."""
+        """Use the reply; return the behaviour's status.
+
+        Args:
+            message: the world's reply to the command.
+
+        Returns:
+            The behaviour's status.
+        """
         raise NotImplementedError
 
     def initialise(self) -> None:
