@@ -4,7 +4,9 @@ A public function or method (its name and its class's name start with no ``_``) 
 parameter besides ``self``/``cls`` has a docstring with an ``Args:`` section; one annotated to return
 something other than None has ``Returns:`` (``Yields:`` for a generator). Left out: dunders, properties,
 the py_trees callbacks whose meaning py_trees defines (`PY_TREES_CALLBACKS`), methods that override
-one of a base class in the four packages (the base documents them), and the modules of `NOT_YET`.
+one of a base class in the four packages or implement one of a `Protocol` the module defines or imports
+(the base or the protocol documents them), and the modules of `NOT_YET`. A context manager's
+``Iterator[None]`` returns nothing.
 """
 
 from __future__ import annotations
@@ -50,6 +52,8 @@ def _returns_something(node: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
     returns = node.returns
     if returns is None:
         return False
+    if isinstance(returns, ast.Subscript) and _base_name(returns) in ("Iterator", "Generator", "AsyncIterator"):
+        returns = returns.slice.elts[0] if isinstance(returns.slice, ast.Tuple) else returns.slice
     return not (isinstance(returns, ast.Constant) and returns.value in (None, "None"))
 
 
@@ -95,6 +99,17 @@ def _inherited(cls: ast.ClassDef, classes: dict[str, list[ast.ClassDef]], seen: 
     return names
 
 
+def _protocol_methods(tree: ast.Module, classes: dict[str, list[ast.ClassDef]]) -> set[str]:
+    """The method names of the protocols ``tree`` defines or imports by name."""
+    names = {node.name for node in tree.body if isinstance(node, ast.ClassDef)}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom):
+            names.update(alias.name for alias in node.names)
+    return {member.name for name in names for cls in classes.get(name, [])
+            if any(_base_name(base) == "Protocol" for base in cls.bases)
+            for member in cls.body if isinstance(member, (ast.FunctionDef, ast.AsyncFunctionDef))}
+
+
 def _problems(node: ast.FunctionDef | ast.AsyncFunctionDef, where: str) -> list[str]:
     docstring = ast.get_docstring(node) or ""
     found = []
@@ -113,11 +128,13 @@ def _undocumented() -> list[str]:
     found: list[str] = []
     for path, tree in trees.items():
         module = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+        protocol = _protocol_methods(tree, classes)
         for node in tree.body:
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and not node.name.startswith("_"):
                 found += _problems(node, f"{module}:{node.name}")
             elif isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
-                inherited = _inherited(node, classes)
+                is_protocol = any(_base_name(base) == "Protocol" for base in node.bases)
+                inherited = _inherited(node, classes) | (set() if is_protocol else protocol)
                 for member in node.body:
                     if (not isinstance(member, (ast.FunctionDef, ast.AsyncFunctionDef)) or member.name.startswith("_")
                             or member.name in PY_TREES_CALLBACKS or member.name in inherited or _is_property(member)):
