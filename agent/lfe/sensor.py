@@ -68,6 +68,15 @@ class PanoramicSensor:
         Each ray sees the cells it crosses up to and including the first occupied one; outside the
         grid counts as occupied but is not reported, so a grid without walls round it is fine. The
         robot's own cell counts as seen free: it stands there.
+
+        Args:
+            cell: the sensor's cell.
+
+        Returns:
+            The cells seen.
+
+        Raises:
+            ValueError: the cell lies outside the grid.
         """
         row, col = int(cell[0]), int(cell[1])
         if not (0 <= row < self.shape[0] and 0 <= col < self.shape[1]):
