@@ -55,6 +55,11 @@ class EpisodeRunner:
         self.blackboard.register_key(bb.ANSWER, access=py_trees.common.Access.READ)
 
     def run(self) -> EpisodeOutcome:
+        """Tick the tree until it answers, fails or runs out of time, recording snapshots as it goes.
+
+        Returns:
+            How the episode ended.
+        """
         started = time.monotonic()
         ticks = 0
         try:
