@@ -2,7 +2,8 @@
 
 A public function or method (its name and its class's name start with no ``_``) that takes a
 parameter besides ``self``/``cls`` has a docstring with an ``Args:`` section; one annotated to return
-something other than None has ``Returns:`` (``Yields:`` for a generator). Left out: dunders, properties,
+something other than None has ``Returns:`` (``Yields:`` for a generator, or ``Returns:`` for
+the context manager it makes). Left out: dunders, properties,
 the py_trees callbacks whose meaning py_trees defines (`PY_TREES_CALLBACKS`), methods that override
 one of a base class in the four packages or implement one of a `Protocol` the module defines or imports
 (the base or the protocol documents them), and the modules of `NOT_YET`. A context manager's
@@ -116,9 +117,9 @@ def _problems(node: ast.FunctionDef | ast.AsyncFunctionDef, where: str) -> list[
     if _has_parameters(node, method="." in where) and "Args:" not in docstring:
         found.append(f"{where}: no Args:" if docstring else f"{where}: no docstring")
     if _returns_something(node):
-        section = "Yields:" if _is_generator(node) else "Returns:"
-        if section not in docstring:
-            found.append(f"{where}: no {section}")
+        sections = ("Yields:", "Returns:") if _is_generator(node) else ("Returns:",)
+        if not any(section in docstring for section in sections):
+            found.append(f"{where}: no {sections[0]}")
     return found
 
 
