@@ -56,7 +56,15 @@ class Thing:
 
 
 class SymbolicScene:
-    """The scene's state (open parts, things moved to the idle space) and the two interfaces on it."""
+    """The scene's state (open parts, things moved to the idle space) and the two interfaces on it.
+
+    Args:
+        things: the scene's things, each with its parent, what hides it and what it blocks.
+        idle_spot: where things picked away are put.
+
+    Raises:
+        ValueError: an instance id used twice, or one naming a thing not in the scene.
+    """
 
     def __init__(self, things: Iterable[Thing], idle_spot: tuple[float, float, float] = (0.0, -2.0, 0.75)) -> None:
         self.things: dict[str, Thing] = {}

@@ -127,6 +127,10 @@ class PredictionSet:
 
     Before the first step every answer is possible; an answer once excluded never comes back,
     which is why a single remaining answer can be given at once.
+
+    Args:
+        q_hat: q̂ from calibration.
+        letters: the answer letters.
     """
 
     def __init__(self, q_hat: float, letters: Sequence[str]) -> None:

@@ -132,7 +132,11 @@ class BudgetRule:
 
 
 class EntropyRule:
-    """Stops when the newest answer distribution is sharp (low entropy)."""
+    """Stops when the newest answer distribution is sharp (low entropy).
+
+    Args:
+        threshold: the entropy (nats) below which it stops.
+    """
 
     name = StopRuleName.ENTROPY
 
@@ -152,7 +156,11 @@ class EntropyRule:
 
 
 class RelevanceRule:
-    """Stops when the VLM says it is confident about the view (Rel above the threshold)."""
+    """Stops when the VLM says it is confident about the view (Rel above the threshold).
+
+    Args:
+        threshold: the relevance above which it stops.
+    """
 
     name = StopRuleName.RELEVANCE
 
@@ -172,7 +180,13 @@ class RelevanceRule:
 
 
 class ConformalRule:
-    """Keeps the running conformal prediction set and stops when it holds one answer (or none)."""
+    """Keeps the running conformal prediction set and stops when it holds one answer (or none).
+
+    Args:
+        q_hat: q̂ from calibration.
+        epsilon: ε, the error rate it was calibrated for.
+        letters: the answer letters.
+    """
 
     name = StopRuleName.CP
 

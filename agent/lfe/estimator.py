@@ -38,7 +38,13 @@ depth 4), enough for the network to see that the map ends there and to predict i
 
 
 class LearnedEstimator:
-    """R_A, D_in and D_out of frontiers, predicted by a `FrontierUNet` from the occupancy map."""
+    """R_A, D_in and D_out of frontiers, predicted by a `FrontierUNet` from the occupancy map.
+
+    Args:
+        model: the network (put in eval mode on ``device``).
+        config: its config.
+        device: the torch device.
+    """
 
     def __init__(self, model: FrontierUNet, config: UNetConfig, device: torch.device | str = "cpu") -> None:
         self.model = model.to(device).eval()

@@ -203,6 +203,9 @@ class FrontierUNet(nn.Module):
     Inputs of any size are padded (with zeros) to a multiple of ``config.multiple`` and the output
     is cropped back; callers that can should pad with unknown map cells themselves, which is what
     the network saw around the edges during training.
+
+    Args:
+        config: the channels, depth and padding multiple.
     """
 
     def __init__(self, config: UNetConfig) -> None:

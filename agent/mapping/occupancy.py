@@ -108,7 +108,12 @@ def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> 
 
 
 class ExplorationMap:
-    """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids."""
+    """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids.
+
+    Args:
+        start_xy: where the robot starts (the grid's centre).
+        config: the map's settings.
+    """
 
     def __init__(self, start_xy: tuple[float, float], config: OccupancyConfig = OccupancyConfig()) -> None:
         self.config = config

@@ -74,7 +74,13 @@ def indifferent_value(config: SemanticValueConfig = SemanticValueConfig(), num_p
 
 
 class SemanticMap:
-    """A float grid of semantic values on the exploration map's GridSpec."""
+    """A float grid of semantic values on the exploration map's GridSpec.
+
+    Args:
+        spec: the exploration map's grid.
+        config: the temperatures τ.
+        default: the value of unwritten cells (`indifferent_value` when None).
+    """
 
     def __init__(self, spec: GridSpec, config: SemanticValueConfig = SemanticValueConfig(),
                  default: float | None = None) -> None:

@@ -52,7 +52,11 @@ class Voxels:
 
 
 class TsdfMap:
-    """Fuses depth frames into a TSDF and hands back the observed voxels as plain arrays."""
+    """Fuses depth frames into a TSDF and hands back the observed voxels as plain arrays.
+
+    Args:
+        config: the voxel size, truncation and depth range.
+    """
 
     def __init__(self, config: TsdfConfig = TsdfConfig()) -> None:
         self.config = config

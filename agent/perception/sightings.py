@@ -100,7 +100,11 @@ def storage_centres(observation: Observation, kind: str, config: SightingConfig 
 
 
 class Sightings:
-    """Every piece seen so far, in the order first seen."""
+    """Every piece seen so far, in the order first seen.
+
+    Args:
+        config: how near a centre merges into a piece.
+    """
 
     def __init__(self, config: SightingConfig = SightingConfig()) -> None:
         self.config = config

@@ -20,7 +20,11 @@ from agent.mapping.grid import GridSpec
 from agent.planning.route import Routes
 
 class RoomFloor:
-    """The cells of a grid on which the named room's floor has been seen."""
+    """The cells of a grid on which the named room's floor has been seen.
+
+    Args:
+        spec: the grid.
+    """
 
     def __init__(self, spec: GridSpec) -> None:
         self.spec = spec
@@ -50,7 +54,11 @@ class RoomFloor:
 
 
 class RoomFloors:
-    """The floor cells seen of each room kind (a `RoomFloor` per kind the frames told)."""
+    """The floor cells seen of each room kind (a `RoomFloor` per kind the frames told).
+
+    Args:
+        spec: the grid.
+    """
 
     def __init__(self, spec: GridSpec) -> None:
         self.spec = spec

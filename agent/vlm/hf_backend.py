@@ -28,7 +28,14 @@ log = logging.getLogger(__name__)
 
 
 class HuggingFaceVLM:
-    """A `VisionLanguageModel` scored from a local image-text-to-text model's next-token logits."""
+    """A `VisionLanguageModel` scored from a local image-text-to-text model's next-token logits.
+
+    Args:
+        settings: the model's folder and the device.
+
+    Raises:
+        VLMError: transformers is not installed, or the folder, device or model cannot be used.
+    """
 
     name = "hf"
 

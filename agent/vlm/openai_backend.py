@@ -40,7 +40,14 @@ _BODY_EXCERPT = 300
 
 
 class OpenAIVLM:
-    """A `VisionLanguageModel` served over the OpenAI chat-completions API."""
+    """A `VisionLanguageModel` served over the OpenAI chat-completions API.
+
+    Args:
+        settings: the server, the model and the API key's variable.
+
+    Raises:
+        VLMError: no model name is set.
+    """
 
     name = "openai"
 

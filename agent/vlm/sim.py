@@ -49,7 +49,11 @@ __all__ = ["SimParams", "SimulatedVLM"]
 
 
 class SimulatedVLM:
-    """A `VisionLanguageModel` grounded only in the frame it is shown."""
+    """A `VisionLanguageModel` grounded only in the frame it is shown.
+
+    Args:
+        params: how well it notices, judges rooms and answers.
+    """
 
     name = "sim"
 

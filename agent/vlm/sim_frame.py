@@ -33,7 +33,13 @@ class Seen:
 class FrameTake:
     """One frame as the model takes it in for one question: `seen` lists every labelled instance,
     `noticed` draws which of some of them the model notices, `room_of` says which room kind it
-    takes a thing to stand in (None when nothing in view tells)."""
+    takes a thing to stand in (None when nothing in view tells).
+
+    Args:
+        observation: the frame.
+        params: the simulated model's parameters.
+        rng: the draws' generator (the misjudged rooms are drawn here).
+    """
 
     def __init__(self, observation: Observation, params: SimParams, rng: np.random.Generator) -> None:
         self.observation = observation

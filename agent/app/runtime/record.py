@@ -25,7 +25,11 @@ def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
 
 
 class SnapshotLog:
-    """Appends each snapshot as one JSON line, flushed, so an interrupted run keeps what it logged."""
+    """Appends each snapshot as one JSON line, flushed, so an interrupted run keeps what it logged.
+
+    Args:
+        path: the JSON-lines file, appended to.
+    """
 
     def __init__(self, path: Path) -> None:
         self._file = open(path, "a", encoding="utf-8")

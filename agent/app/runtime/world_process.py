@@ -18,7 +18,14 @@ class WorldStartError(RuntimeError):
 
 
 class WorldProcess:
-    """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file."""
+    """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file.
+
+    Args:
+        namespace: the bus namespace.
+        endpoint: the endpoint the world listens on.
+        camera: the head camera's settings.
+        log_path: the world's log file.
+    """
 
     def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path) -> None:
         self.log_path = log_path
