@@ -19,7 +19,14 @@ from agent.vlm.protocol import VisionLanguageModel
 
 
 class AsyncVLMQuery(py_trees.behaviour.Behaviour):
-    """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`."""
+    """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`.
+
+    Args:
+        name: the node's name.
+        vlm: the model asked.
+        timeout_s: how long an answer may take.
+        timer: times the queries, if given.
+    """
 
     stage = "vlm"
 

@@ -18,6 +18,12 @@ class WorldCommand(py_trees.behaviour.Behaviour):
     The command is sent in `initialise`; `update` polls for the reply without blocking, so the tree
     keeps ticking (and publishing snapshots) while the world works. A timeout, an error reply or a
     world that has gone turns into FAILURE with the reason as the feedback message.
+
+    Args:
+        name: the node's name.
+        link: the world link.
+        verb: the command sent.
+        timeout_s: how long the reply may take (the link's default when None).
     """
 
     def __init__(self, name: str, link: WorldLink, verb: str, timeout_s: float | None = None) -> None:
