@@ -97,7 +97,13 @@ class TrajectoryRun:
 
 
 class Arm:
-    """The lift, the Panda and its gripper of the robot ``body`` loaded from `homebot_urdf`."""
+    """The lift, the Panda and its gripper of the robot ``body`` loaded from `homebot_urdf`.
+
+    Args:
+        client: the PyBullet client.
+        body: the robot's body.
+        spec: the arm's joints and limits.
+    """
 
     def __init__(self, client: int, body: int, spec: ArmSpec) -> None:
         self.client, self.body, self.spec = client, body, spec

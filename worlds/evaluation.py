@@ -43,7 +43,12 @@ ROUTE_SAMPLE_M = 0.05
 
 
 class FloorSeen:
-    """The home's free floor on a grid, and the cells of it that head frames have shown."""
+    """The home's free floor on a grid, and the cells of it that head frames have shown.
+
+    Args:
+        home: the home.
+        camera: the head camera.
+    """
 
     def __init__(self, home: HomeSpec, camera: CameraConfig) -> None:
         space = free_space(home, 0.0, FLOOR_CELL_M)
@@ -78,7 +83,14 @@ class FloorSeen:
 
 
 class EpisodeRecord:
-    """What happened in one home episode, from the evaluator's side (see the module's notes)."""
+    """What happened in one home episode, from the evaluator's side (see the module's notes).
+
+    Args:
+        home: the home.
+        scenario: the episode's scenario.
+        camera: the head camera.
+        start: where the base starts.
+    """
 
     def __init__(self, home: HomeSpec, scenario: Scenario, camera: CameraConfig, start: Point) -> None:
         self.home = home

@@ -16,7 +16,11 @@ CLOSED_SHARE = 0.05
 
 
 class HomeFacts:
-    """Indexes a home's things by id and answers containment and visibility questions."""
+    """Indexes a home's things by id and answers containment and visibility questions.
+
+    Args:
+        home: the home.
+    """
 
     def __init__(self, home: HomeSpec) -> None:
         self.home = home

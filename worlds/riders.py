@@ -27,7 +27,13 @@ Carrier = Drawer | int  # a drawer, or the instance id of an object
 
 
 class Riders:
-    """The carriers of one built scene's small objects, and the drawer positions last seen."""
+    """The carriers of one built scene's small objects, and the drawer positions last seen.
+
+    Args:
+        client: the PyBullet client.
+        built: the built scene.
+        parents: each object's parent instance id.
+    """
 
     def __init__(self, client: int, built: BuiltScene, parents: Mapping[int, int | None]) -> None:
         """``parents``: each object's parent instance id (a piece of furniture, an object, or None)."""

@@ -14,7 +14,11 @@ from typing import Any
 
 
 class SpecError(ValueError):
-    """A scene spec that cannot be used. ``errors`` holds one 'path: problem' line per problem."""
+    """A scene spec that cannot be used. ``errors`` holds one 'path: problem' line per problem.
+
+    Args:
+        errors: the problems.
+    """
 
     def __init__(self, errors: list[str]) -> None:
         super().__init__("\n".join(errors))

@@ -13,7 +13,13 @@ from worlds.bus.rpc import Arrays, PendingReply
 
 
 class WorldLink:
-    """Sends world commands; any query fails at once with a reason when the world's token goes."""
+    """Sends world commands; any query fails at once with a reason when the world's token goes.
+
+    Args:
+        session: the bus session.
+        keys: the namespace's keys.
+        timeout_s: how long a reply may take by default.
+    """
 
     def __init__(self, session: zenoh.Session, keys: Keys, timeout_s: float = 10.0) -> None:
         self.session = session

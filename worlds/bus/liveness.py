@@ -9,7 +9,12 @@ import zenoh
 
 
 class LivenessWatch:
-    """Follows one liveliness token; `gone` gives a reason once the token has been seen and lost."""
+    """Follows one liveliness token; `gone` gives a reason once the token has been seen and lost.
+
+    Args:
+        session: the bus session.
+        key: the token's key.
+    """
 
     def __init__(self, session: zenoh.Session, key: str) -> None:
         self.key = key

@@ -38,6 +38,10 @@ class CommandServer:
 
     Handlers run in the serving thread rather than Zenoh's callback threads, so a simulator that is
     not thread-safe (PyBullet) is only ever touched from one thread.
+
+    Args:
+        session: the bus session.
+        limits: the largest request accepted.
     """
 
     def __init__(self, session: zenoh.Session, limits: Limits = DEFAULT_LIMITS) -> None:
@@ -105,6 +109,15 @@ class PendingReply:
 
     ``gone`` is asked on every poll; when it returns a reason (the server's liveliness token went),
     the query fails with that reason at once instead of waiting for its deadline.
+
+    Args:
+        session: the bus session.
+        key: the command's key.
+        meta: its metadata.
+        arrays: its arrays.
+        timeout_s: how long the reply may take.
+        gone: says why the server is gone, if it is.
+        limits: the largest reply accepted.
     """
 
     def __init__(
