@@ -37,6 +37,14 @@ class InstanceLabel:
 
     @classmethod
     def from_meta(cls, entry: dict) -> InstanceLabel:
+        """A label read from an observation's metadata.
+
+        Args:
+            entry: one entry of the metadata's ``labels``.
+
+        Returns:
+            The label.
+        """
         optional = {key: (str(entry[key]) if entry.get(key) is not None else None) for key in ("state", "inside")}
         return cls(int(entry["id"]), str(entry["category"]), str(entry["colour"]), **optional)
 
@@ -54,6 +62,17 @@ class Observation:
 
     @classmethod
     def from_message(cls, message: Message) -> Observation:
+        """An observation read from the world's message, checked.
+
+        Args:
+            message: the observation's message (metadata and image arrays).
+
+        Returns:
+            The observation.
+
+        Raises:
+            ObservationError: a field is missing or malformed.
+        """
         meta, arrays = message.meta, message.arrays
         try:
             intrinsics = Intrinsics.from_meta(meta["camera"])

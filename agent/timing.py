@@ -20,10 +20,21 @@ class StageTimer:
         self.samples: dict[str, list[float]] = defaultdict(list)
 
     def record(self, stage: str, milliseconds: float) -> None:
+        """Add one sample of a stage's time.
+
+        Args:
+            stage: the stage's name.
+            milliseconds: how long it took.
+        """
         self.samples[stage].append(float(milliseconds))
 
     @contextmanager
     def measure(self, stage: str) -> Iterator[None]:
+        """Time the ``with`` block as one sample of ``stage``.
+
+        Args:
+            stage: the stage's name.
+        """
         started = time.perf_counter()
         try:
             yield
@@ -31,7 +42,11 @@ class StageTimer:
             self.record(stage, (time.perf_counter() - started) * 1000.0)
 
     def summary(self) -> dict[str, dict[str, float]]:
-        """Count, median, p95 and max per stage."""
+        """Count, median, p95 and max per stage.
+
+        Returns:
+            The figures by stage name (milliseconds).
+        """
         return {
             stage: {
                 "count": len(values),

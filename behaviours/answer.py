@@ -14,7 +14,11 @@ from worlds.bus.questions import LETTERS
 
 
 class ShouldStop(py_trees.behaviour.Behaviour):
-    """SUCCESS once the step budget is spent or no frontier is left; FAILURE while exploring."""
+    """SUCCESS once the step budget is spent or no frontier is left; FAILURE while exploring.
+
+    Args:
+        name: the node's name.
+    """
 
     def __init__(self, name: str = "ShouldStop") -> None:
         super().__init__(name)
@@ -74,7 +78,11 @@ class _Answer(py_trees.behaviour.Behaviour):
 
 
 class Answer(_Answer):
-    """Gives the answer the stopping rule decided on (the single answer left in the conformal set)."""
+    """Gives the answer the stopping rule decided on (the single answer left in the conformal set).
+
+    Args:
+        name: the node's name.
+    """
 
     def __init__(self, name: str = "Answer") -> None:
         super().__init__(name)
@@ -84,7 +92,11 @@ class Answer(_Answer):
 
 
 class AnswerFallback(_Answer):
-    """Answers argmax f̂ at the step of highest relevance when the robot must stop undecided."""
+    """Answers argmax f̂ at the step of highest relevance when the robot must stop undecided.
+
+    Args:
+        name: the node's name.
+    """
 
     def __init__(self, name: str = "AnswerFallback") -> None:
         super().__init__(name)

@@ -88,7 +88,13 @@ class ApproachConfig:
 class ApproachStorage(py_trees.behaviour.Behaviour):
     """Writes a `MovePlan` towards the named storage (a view of a piece seen, else its room) and
     succeeds, or fails when there is nowhere to go (see the module docstring). What it has seen
-    and tried over the episode is the blackboard's ``approach_state``."""
+    and tried over the episode is the blackboard's ``approach_state``.
+
+    Args:
+        config: how to approach storage.
+        explore: the exploration settings (step length, paths).
+        name: the node's name.
+    """
 
     def __init__(self, config: ApproachConfig = ApproachConfig(), explore: ExploreConfig = ExploreConfig(),
                  name: str = "ApproachStorage") -> None:

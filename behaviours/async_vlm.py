@@ -19,7 +19,14 @@ from agent.vlm.protocol import VisionLanguageModel
 
 
 class AsyncVLMQuery(py_trees.behaviour.Behaviour):
-    """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`."""
+    """Base for leaves that ask the VLM: subclasses give `ask` (runs in the worker) and `use`.
+
+    Args:
+        name: the node's name.
+        vlm: the model asked.
+        timeout_s: how long an answer may take.
+        timer: times the queries, if given.
+    """
 
     stage = "vlm"
 
@@ -33,15 +40,33 @@ class AsyncVLMQuery(py_trees.behaviour.Behaviour):
         self._started = 0.0
 
     def inputs(self) -> tuple[Any, ...]:
-        """Read what the question needs from the blackboard (in the tick thread)."""
+        """Read what the question needs from the blackboard (in the tick thread).
+
+        Returns:
+            The arguments `ask` is called with (none by default).
+        """
         return ()
 
     def ask(self, *inputs: Any) -> Any:
-        """Ask the VLM (in the worker thread); the result goes to `use`."""
+        """Ask the VLM (in the worker thread); the result goes to `use`.
+
+        Args:
+            *inputs: what `inputs` read from the blackboard.
+
+        Returns:
+            The VLM's answer, handed to `use`.
+        """
         raise NotImplementedError
 
     def use(self, answer: Any) -> Status:
-        """Record the answer (in the tick thread) and say how it went."""
+        """Record the answer (in the tick thread) and say how it went.
+
+        Args:
+            answer: what `ask` returned.
+
+        Returns:
+            The behaviour's status for this tick.
+        """
         raise NotImplementedError
 
     def setup(self, **kwargs: object) -> None:

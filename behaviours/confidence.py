@@ -17,7 +17,12 @@ from agent.eqa.stopping import ConformalRule, StoppingRule
 
 
 class UpdatePredictionSet(py_trees.behaviour.Behaviour):
-    """Feeds each new step's f̂ and Rel to the stopping rule and publishes where it stands."""
+    """Feeds each new step's f̂ and Rel to the stopping rule and publishes where it stands.
+
+    Args:
+        rule: the stopping rule.
+        name: the node's name.
+    """
 
     def __init__(self, rule: StoppingRule, name: str = "UpdatePredictionSet") -> None:
         super().__init__(name)
@@ -49,7 +54,11 @@ class UpdatePredictionSet(py_trees.behaviour.Behaviour):
 
 
 class CheckConfidence(py_trees.behaviour.Behaviour):
-    """SUCCESS once the stopping rule has decided to stop; FAILURE while the robot should go on."""
+    """SUCCESS once the stopping rule has decided to stop; FAILURE while the robot should go on.
+
+    Args:
+        name: the node's name.
+    """
 
     def __init__(self, name: str = "CheckConfidence") -> None:
         super().__init__(name)

@@ -74,6 +74,15 @@ class EqaTreeParts:
 
 
 def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
+    """The EQA tree: answer once confident, fall back to an answer when the budget is spent, else explore a step.
+
+    Args:
+        parts: what the leaves share: the world link, the VLM, the exploration settings, the timer,
+            the seed, the acting settings.
+
+    Returns:
+        The tree's root, ready for `setup` and ticking.
+    """
     timer = parts.timer
     confident = py_trees.composites.Sequence(
         "Confident", memory=False, children=[CheckConfidence(), Answer()]

@@ -12,6 +12,13 @@ from agent.timing import StageTimer
 
 
 class IntegrateMap(py_trees.behaviour.Behaviour):
+    """Fuses the newest frame into the TSDF and refreshes the 2D maps on the blackboard.
+
+    Args:
+        timer: times the fusion, if given.
+        name: the node's name.
+    """
+
     def __init__(self, timer: StageTimer | None = None, name: str = "IntegrateMap") -> None:
         super().__init__(name)
         self.timer = timer

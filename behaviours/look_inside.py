@@ -113,7 +113,13 @@ class _Outcome:
 class LookInside(py_trees.behaviour.Behaviour):
     """Opens the storage the question asks about and leaves the views inside for the VLM (see the
     module docstring). What it has seen and opened over the episode is the blackboard's
-    ``look_inside_state``; the arm works in a thread of the executor made in `setup`."""
+    ``look_inside_state``; the arm works in a thread of the executor made in `setup`.
+
+    Args:
+        link: the world link.
+        config: how to open storage and look inside.
+        name: the node's name.
+    """
 
     def __init__(self, link: WorldLink, config: LookInsideConfig = LookInsideConfig(),
                  name: str = "LookInside") -> None:

@@ -19,6 +19,14 @@ from behaviours.world_command import WorldCommand
 
 
 class Navigate(WorldCommand):
+    """Drives the planned path; the world stops at the first contact, and the map marks where the base drove and bumped.
+
+    Args:
+        link: the world link.
+        timeout_s: how long a move may take.
+        name: the node's name.
+    """
+
     def __init__(self, link: WorldLink, timeout_s: float = 30.0, name: str = "Navigate") -> None:
         super().__init__(name, link, "move_base", timeout_s)
         self.blackboard = self.attach_blackboard_client(name=name)

@@ -13,7 +13,13 @@ from behaviours.world_command import WorldCommand
 
 
 class Observe(WorldCommand):
-    """Asks the world for a frame and puts the checked `Observation` on the blackboard."""
+    """Asks the world for a frame and puts the checked `Observation` on the blackboard.
+
+    Args:
+        link: the world link.
+        timer: times the observation, if given.
+        name: the node's name.
+    """
 
     def __init__(self, link: WorldLink, timer: StageTimer | None = None, name: str = "Observe") -> None:
         super().__init__(name, link, "observe")

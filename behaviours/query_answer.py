@@ -16,6 +16,16 @@ from worlds.bus.questions import LETTERS
 
 
 class QueryVLM(AsyncVLMQuery):
+    """Asks the VLM for f̂ (the answer distribution) and Rel (its confidence) on the view, and logs the step.
+
+    Args:
+        vlm: the model asked.
+        timeout_s: how long an answer may take.
+        timer: times the queries, if given.
+        name: the node's name.
+        view: the blackboard key of the view asked about.
+    """
+
     def __init__(self, vlm: VisionLanguageModel, timeout_s: float = 30.0,
                  timer: StageTimer | None = None, name: str = "QueryVLM", view: str = bb.OBSERVATION) -> None:
         super().__init__(name, vlm, timeout_s, timer)

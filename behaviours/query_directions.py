@@ -27,6 +27,20 @@ from behaviours.async_vlm import AsyncVLMQuery
 
 
 class QueryDirections(AsyncVLMQuery):
+    """Asks the VLM which way to explore (LSV over lettered floor points, GSV of the view) into the semantic map.
+
+    Args:
+        vlm: the model asked.
+        strategy: which semantic values the method uses.
+        rng: the prompt points' generator.
+        points: how prompt points are placed.
+        values: the temperatures τ.
+        timeout_s: how long an answer may take.
+        timer: times the queries, if given.
+        images_dir: where the marked prompt images are saved, if anywhere.
+        name: the node's name.
+    """
+
     stage = "vlm_directions"
 
     def __init__(self, vlm: VisionLanguageModel, strategy: ExploreStrategy, rng: np.random.Generator,

@@ -31,6 +31,13 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
     under the default rule both weigh the path length and keep to the frontier chosen until it is
     reached or gone (`agent.planning.frontier_choice`, which keeps it in ``frontier_goal``); LFE plans over the shipped network's estimates with the steps left (`agent.lfe.eqa_frontier`),
     loading the network on the first choice so that other methods never import torch.
+
+    Args:
+        config: the exploration method and its settings.
+        weights: the frontier weights' temperatures.
+        rng: the episode's generator (a fixed one when None).
+        timer: times the choice, if given.
+        name: the node's name.
     """
 
     def __init__(self, config: ExploreConfig = ExploreConfig(), weights: FrontierWeightConfig = FrontierWeightConfig(),
@@ -107,6 +114,9 @@ class MarkExplorationComplete(py_trees.behaviour.Behaviour):
 
     SUCCESS only when `SelectFrontier` found no frontier (no plan); FAILURE otherwise, so the
     move toward the planned frontier runs next.
+
+    Args:
+        name: the node's name.
     """
 
     def __init__(self, name: str = "MarkExplorationComplete") -> None:

@@ -18,6 +18,12 @@ class WorldCommand(py_trees.behaviour.Behaviour):
     The command is sent in `initialise`; `update` polls for the reply without blocking, so the tree
     keeps ticking (and publishing snapshots) while the world works. A timeout, an error reply or a
     world that has gone turns into FAILURE with the reason as the feedback message.
+
+    Args:
+        name: the node's name.
+        link: the world link.
+        verb: the command sent.
+        timeout_s: how long the reply may take (the link's default when None).
     """
 
     def __init__(self, name: str, link: WorldLink, verb: str, timeout_s: float | None = None) -> None:
@@ -29,11 +35,25 @@ class WorldCommand(py_trees.behaviour.Behaviour):
         self._request_error: str | None = None
 
     def request(self) -> dict[str, Any]:
-        """The command's metadata; raise ValueError if it cannot be formed."""
+        """The command's metadata; raise ValueError if it cannot be formed.
+
+        Returns:
+            The command's metadata (empty by default).
+
+        Raises:
+            ValueError: the command cannot be formed from the blackboard.
+        """
         return {}
 
     def on_reply(self, message: Message) -> Status:
-        """Use the reply; return the behaviour's status."""
+        """Use the reply; return the behaviour's status.
+
+        Args:
+            message: the world's reply to the command.
+
+        Returns:
+            The behaviour's status.
+        """
         raise NotImplementedError
 
     def initialise(self) -> None:

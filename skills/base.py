@@ -336,7 +336,14 @@ class ArmSkill(PortedSkill):
         return Status.FAILURE
 
     def summary(self, result: SkillResult) -> str:
-        """One line for the feedback message of a skill that succeeded (with the grasp it took, if any)."""
+        """One line for the feedback message of a skill that succeeded (with the grasp it took, if any).
+
+        Args:
+            result: how the skill went.
+
+        Returns:
+            The line, e.g. ``"open: done in 2.1 s (1.8 s of motion, planned in 120 ms)"``.
+        """
         grasp = f", {result.info['grasp']} grasp" if "grasp" in result.info else ""
         return (f"{self.skill_name}: done in {result.execution_s:.1f} s ({result.info.get('motion_s', 0.0):.1f} s "
                 f"of motion, planned in {result.planning_ms:.0f} ms{grasp})")

@@ -89,19 +89,42 @@ class Port:
         return value
 
     def describe(self) -> str:
-        """One line for listings: ``name (type, default): doc``."""
+        """One line for listings: ``name (type, default): doc``.
+
+        Returns:
+            The line.
+        """
         default = "" if self.direction == "output" else (
             ", required" if self.required else f", default {self.default!r}")
         return f"{self.direction} {self.name} ({self.type.__name__}{default}): {self.doc}"
 
 
 def input_port(name: str, type_: type, doc: str, default: Any = REQUIRED) -> Port:
-    """An input port (see `Port`); ``default=REQUIRED`` makes it one that must be bound."""
+    """An input port (see `Port`); ``default=REQUIRED`` makes it one that must be bound.
+
+    Args:
+        name: the port's name, as bound and as read.
+        type_: the type its value must have.
+        doc: what the value is, for listings.
+        default: the value when unbound, or `REQUIRED`.
+
+    Returns:
+        The port.
+    """
     return Port(name, "input", type_, doc, default)
 
 
 def output_port(name: str, type_: type, doc: str) -> Port:
-    """An output port (see `Port`)."""
+    """An output port (see `Port`).
+
+    Args:
+        name: the port's name.
+        type_: the type of what the skill gives there.
+        doc: what the value is, for listings.
+
+    Returns:
+        The port.
+    """
     return Port(name, "output", type_, doc)
 
 
@@ -121,7 +144,14 @@ def _parse(text: str, type_: type) -> Any:
 
 
 def blackboard_key(binding: Any) -> str | None:
-    """The key of a binding written ``"{key}"``; None for a value."""
+    """The key of a binding written ``"{key}"``; None for a value.
+
+    Args:
+        binding: a port's binding: a value, or ``"{key}"``.
+
+    Returns:
+        The blackboard key, or None when the binding is a value.
+    """
     match = _KEY.match(binding) if isinstance(binding, str) else None
     return match.group(1) if match else None
 
@@ -201,11 +231,20 @@ class PortedSkill(py_trees.behaviour.Behaviour):
         return frozenset(self._keys.values())
 
     def input_problem(self) -> str:
-        """Why the inputs could not be read as the skill started ("" when they were)."""
+        """Why the inputs could not be read as the skill started ("" when they were).
+
+        Returns:
+            The problem, or "".
+        """
         return self._input_problem
 
     def set_output(self, name: str, value: Any) -> None:
-        """Give the output ``name``: kept in `outputs`, and written to its key when bound to one."""
+        """Give the output ``name``: kept in `outputs`, and written to its key when bound to one.
+
+        Args:
+            name: the output port's name.
+            value: what the skill gives there.
+        """
         self.outputs[name] = value
         if name in self._keys:
             self.blackboard.set(self._keys[name], value)

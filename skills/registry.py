@@ -64,7 +64,11 @@ class SkillEntry:
 
 def installed_skills() -> list[SkillEntry]:
     """Every skill declared by an installed distribution, sorted by name (a name declared twice
-    appears twice)."""
+    appears twice).
+
+    Returns:
+        The entries.
+    """
     found = []
     for entry in entry_points(group=GROUP):
         distribution = entry.dist.name if entry.dist is not None else "?"
@@ -85,15 +89,30 @@ class SkillRegistry:
         self._classes: dict[str, type[PortedSkill]] = {}
 
     def names(self) -> list[str]:
-        """Every registered name, sorted."""
+        """Every registered name, sorted.
+
+        Returns:
+            The names.
+        """
         return sorted(self._entries)
 
     def entries(self) -> list[SkillEntry]:
-        """Every entry, sorted by name (duplicates included)."""
+        """Every entry, sorted by name (duplicates included).
+
+        Returns:
+            The entries.
+        """
         return [entry for name in self.names() for entry in self._entries[name]]
 
     def problem(self, name: str) -> str:
-        """Why the skill ``name`` cannot be used ("" when it can)."""
+        """Why the skill ``name`` cannot be used ("" when it can).
+
+        Args:
+            name: the skill's registered name.
+
+        Returns:
+            The reason, or "".
+        """
         try:
             self.load(name)
         except SkillError as error:
@@ -102,6 +121,12 @@ class SkillRegistry:
 
     def load(self, name: str) -> type[PortedSkill]:
         """The class of the skill registered as ``name``.
+
+        Args:
+            name: the skill's registered name.
+
+        Returns:
+            The skill's class (loaded once, then kept).
 
         Raises:
             SkillError: no such skill, two packages declare it, or it cannot be loaded.

@@ -25,7 +25,17 @@ _EXPECTED = {
 
 
 def arm_state(meta: dict[str, Any]) -> dict[str, Any]:
-    """The fields of an arm reply, checked: joints, TCP pose, held, stowed, and a motion's errors and contacts."""
+    """The fields of an arm reply, checked: joints, TCP pose, held, stowed, and a motion's errors and contacts.
+
+    Args:
+        meta: the reply's metadata.
+
+    Returns:
+        The fields, with the joints and TCP pose as arrays.
+
+    Raises:
+        ValueError: a field is missing or malformed.
+    """
     try:
         q = np.asarray(meta["positions"], dtype=float)
         tcp = np.asarray(meta["tcp_pose"], dtype=float)
@@ -47,7 +57,14 @@ def arm_state(meta: dict[str, Any]) -> dict[str, Any]:
 
 
 def thing_name(label: dict[str, Any]) -> str:
-    """How a reply's label reads in a message: "handle 12"."""
+    """How a reply's label reads in a message: "handle 12".
+
+    Args:
+        label: a reply's label (its ``category`` and ``id``).
+
+    Returns:
+        The name.
+    """
     return f"{label.get('category', 'something')} {label.get('id', '')}".strip()
 
 

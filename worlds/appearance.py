@@ -46,11 +46,26 @@ def _dim(colour: str, amount: float) -> RGBA:
 
 
 def is_on(state: dict[str, str]) -> bool:
+    """Whether a thing's state says it is switched on.
+
+    Args:
+        state: the thing's state (``power`` "on" or "off", if it has one).
+
+    Returns:
+        Whether it is on.
+    """
     return state.get("power") == "on"
 
 
 def furniture_visuals(piece: Furniture) -> tuple[Visual, ...]:
-    """What to draw for a furniture piece without storage: one box, or its parts if it has switches."""
+    """What to draw for a furniture piece without storage: one box, or its parts if it has switches.
+
+    Args:
+        piece: the furniture piece.
+
+    Returns:
+        The visuals.
+    """
     draw = _DRAWERS.get(piece.category)
     if draw is None:
         return (Visual("box", piece.center, piece.size, COLOURS[piece.colour]),)
@@ -58,7 +73,14 @@ def furniture_visuals(piece: Furniture) -> tuple[Visual, ...]:
 
 
 def item_visuals(item: Item) -> tuple[Visual, ...]:
-    """What to draw for a small object: its primitive, or a base, stem and shade for a table lamp."""
+    """What to draw for a small object: its primitive, or a base, stem and shade for a table lamp.
+
+    Args:
+        item: the object.
+
+    Returns:
+        The visuals.
+    """
     if item.category != "table lamp":
         return (Visual(item.shape, item.center, item.dims, COLOURS[item.colour]),)
     x, y, z = item.center

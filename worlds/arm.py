@@ -97,7 +97,13 @@ class TrajectoryRun:
 
 
 class Arm:
-    """The lift, the Panda and its gripper of the robot ``body`` loaded from `homebot_urdf`."""
+    """The lift, the Panda and its gripper of the robot ``body`` loaded from `homebot_urdf`.
+
+    Args:
+        client: the PyBullet client.
+        body: the robot's body.
+        spec: the arm's joints and limits.
+    """
 
     def __init__(self, client: int, body: int, spec: ArmSpec) -> None:
         self.client, self.body, self.spec = client, body, spec
@@ -121,25 +127,53 @@ class Arm:
     # -- state ---------------------------------------------------------------------------------
 
     def positions(self) -> np.ndarray:
+        """The arm's joint positions now (rad or m), in the spec's order.
+
+        Returns:
+            The positions.
+        """
         states = p.getJointStates(self.body, self.joints, physicsClientId=self.client)
         return np.array([s[0] for s in states])
 
     def finger_positions(self) -> np.ndarray:
+        """The two fingers' positions now (m each).
+
+        Returns:
+            The positions.
+        """
         states = p.getJointStates(self.body, self.fingers, physicsClientId=self.client)
         return np.array([s[0] for s in states])
 
     def gripper_width(self) -> float:
-        """The distance between the fingers' pads, in metres."""
+        """The distance between the fingers' pads, in metres.
+
+        Returns:
+            The width.
+        """
         return float(self.finger_positions().sum())
 
     def link_pose(self, name: str) -> Pose:
-        """The 4x4 world pose of a link's URDF frame."""
+        """The 4x4 world pose of a link's URDF frame.
+
+        Args:
+            name: the link's name.
+
+        Returns:
+            The pose.
+        """
         state = p.getLinkState(self.body, self.links[name], computeForwardKinematics=True, physicsClientId=self.client)
         return _matrix(state[4], state[5])
 
     def is_stowed(self, tolerance: float = 0.02) -> bool:
         """Whether the arm is at its stowed pose, give or take ``tolerance`` (rad or m): anywhere that
-        close, it stays well inside the base's cylinder."""
+        close, it stays well inside the base's cylinder.
+
+        Args:
+            tolerance: how far each joint may be from its stowed position.
+
+        Returns:
+            Whether it is stowed.
+        """
         return bool(np.all(np.abs(self.positions() - np.array(self.spec.stowed)) <= tolerance))
 
     # -- motion --------------------------------------------------------------------------------
@@ -181,6 +215,16 @@ class Arm:
         matching target velocity. After each sample the robot's contacts (base link excepted, and
         those ``ignore(body, link)`` accepts) are collected; with ``stop_on_contact`` the arm stops
         at the first and holds where it is.
+
+        Args:
+            samples: the joint positions to track.
+            dt: the time between samples (s).
+            on_step: called after every physics step.
+            stop_on_contact: whether to stop at the first contact.
+            ignore: which contacts (body, link) do not count.
+
+        Returns:
+            How the trajectory went.
         """
         steps = max(1, math.ceil(dt / SIM_DT - 1e-9))
         p.setTimeStep(dt / steps, physicsClientId=self.client)
@@ -216,7 +260,11 @@ class Arm:
         return TrajectoryRun(positions, worst, final, done, stopped, list(touches.values()))
 
     def touches(self) -> list[Touch]:
-        """Contacts deeper than `CONTACT_DEPTH` of the robot's links (all but the base) in the last step."""
+        """Contacts deeper than `CONTACT_DEPTH` of the robot's links (all but the base) in the last step.
+
+        Returns:
+            The contacts.
+        """
         found = []
         for point in p.getContactPoints(bodyA=self.body, physicsClientId=self.client):
             link, other = point[3], point[2]
@@ -229,7 +277,12 @@ class Arm:
     # -- gripper -------------------------------------------------------------------------------
 
     def move_fingers(self, target: float, on_step: OnStep) -> None:
-        """Drive both fingers to ``target`` (each, metres) until they get there or stop against something."""
+        """Drive both fingers to ``target`` (each, metres) until they get there or stop against something.
+
+        Args:
+            target: each finger's position (m).
+            on_step: called after every physics step.
+        """
         self._drive_fingers(target)
         last = self.finger_positions()
         for _ in range(int(FINGER_TIMEOUT_S / SIM_DT)):
@@ -240,7 +293,14 @@ class Arm:
             last = now
 
     def touched_by_gripper(self, margin: float = 0.003) -> list[Touch]:
-        """What the hand and fingers touch now, within ``margin`` metres (closest points: no step needed)."""
+        """What the hand and fingers touch now, within ``margin`` metres (closest points: no step needed).
+
+        Args:
+            margin: how near counts as touching (m).
+
+        Returns:
+            The contacts.
+        """
         found = []
         for own in self.gripper_links:
             lo, hi = p.getAABB(self.body, own, physicsClientId=self.client)
@@ -252,7 +312,16 @@ class Arm:
         return found
 
     def hold(self, body: int, link: int, tied: bool) -> Grip:
-        """Hold ``body``'s ``link`` where it is relative to the hand (see the module's docstring)."""
+        """Hold ``body``'s ``link`` where it is relative to the hand (see the module's docstring).
+
+        Args:
+            body: the body held.
+            link: its link (-1: the whole body).
+            tied: whether it is tied to the hand (a handle) rather than carried.
+
+        Returns:
+            The grip.
+        """
         hand = p.getLinkState(self.body, self.hand, computeForwardKinematics=True, physicsClientId=self.client)
         links = (link,)
         if tied and (parent := p.getJointInfo(body, link, physicsClientId=self.client)[16]) >= 0:
@@ -276,7 +345,11 @@ class Arm:
         return self.grip
 
     def let_go(self) -> Grip | None:
-        """Stop holding (the fingers stay where they are); what was held, if anything."""
+        """Stop holding (the fingers stay where they are); what was held, if anything.
+
+        Returns:
+            The grip let go, or None.
+        """
         grip = self.grip
         if grip is None:
             return None

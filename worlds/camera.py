@@ -38,7 +38,16 @@ class Frame:
 
 
 def linear_depth(buffer: np.ndarray, near: float, far: float) -> np.ndarray:
-    """Metric z-depth from an OpenGL depth buffer; 0 where the buffer is at the far plane."""
+    """Metric z-depth from an OpenGL depth buffer; 0 where the buffer is at the far plane.
+
+    Args:
+        buffer: the depth buffer (0 to 1).
+        near: the near plane (m).
+        far: the far plane (m).
+
+    Returns:
+        The depth (m, float32).
+    """
     d = np.asarray(buffer, dtype=np.float64)
     z = far * near / (far - (far - near) * d)
     return np.where(d >= _FAR_PLANE, 0.0, z).astype(np.float32)
@@ -62,13 +71,33 @@ def render(
     base_pose: tuple[float, float, float],
     labels: SegLabels,
 ) -> Frame:
-    """Render what the head camera sees from ``base_pose``; labels only for instances in the frame."""
+    """Render what the head camera sees from ``base_pose``; labels only for instances in the frame.
+
+    Args:
+        client: the PyBullet client.
+        camera: the head camera.
+        base_pose: the base's pose (x, y, yaw).
+        labels: the labels by body and link.
+
+    Returns:
+        The frame.
+    """
     return render_at(client, camera, camera_pose(base_pose, camera), labels)
 
 
 def render_at(client: int, camera: CameraConfig, pose: np.ndarray, labels: SegLabels) -> Frame:
     """Render what a camera with ``camera``'s intrinsics sees from ``pose`` (4x4 camera-to-world,
-    OpenCV axes): the head camera, or the wrist camera wherever the arm has put it."""
+    OpenCV axes): the head camera, or the wrist camera wherever the arm has put it.
+
+    Args:
+        client: the PyBullet client.
+        camera: the camera's settings.
+        pose: the camera's world pose.
+        labels: the labels by body and link.
+
+    Returns:
+        The frame.
+    """
     view, projection = _matrices(camera, pose)
     started = time.perf_counter()
     _, _, rgba, depth_buffer, body_seg = p.getCameraImage(

@@ -57,7 +57,18 @@ class Surface:
 def place_objects(
     rng: np.random.Generator, rooms: dict[str, Rect], furniture: list[Furniture], keep_out: list[Rect], first_id: int
 ) -> list[Item]:
-    """Objects for every room, ids from ``first_id``; ``keep_out`` is where no floor object may stand."""
+    """Objects for every room, ids from ``first_id``; ``keep_out`` is where no floor object may stand.
+
+    Args:
+        rng: the draws' generator.
+        rooms: each room's rectangle.
+        furniture: the furniture placed.
+        keep_out: where no floor object may stand.
+        first_id: the first object's id.
+
+    Returns:
+        The objects.
+    """
     placer = _Placer(rng, furniture, keep_out, first_id)
     for name, rect in rooms.items():
         pieces = [f for f in furniture if f.room == name]

@@ -64,7 +64,17 @@ class ResetRequest:
 
 def parse_reset(meta: dict[str, Any]) -> ResetRequest:
     """From ``{"seed": int >= 0, "n_rooms": optional int, "scene": optional spec, "scenario": optional}``
-    or ``{"seed": int >= 0, "tabletop": task}``."""
+    or ``{"seed": int >= 0, "tabletop": task}``.
+
+    Args:
+        meta: the request's metadata.
+
+    Returns:
+        The request.
+
+    Raises:
+        RequestError: naming the field that is wrong.
+    """
     _only(meta, "reset", ("seed", "n_rooms", "scene", "scenario", "tabletop"))
     if "seed" not in meta:
         raise RequestError("reset.seed: missing (an integer >= 0 is required)")
@@ -125,7 +135,17 @@ def _parse_scenario(data: Any) -> Scenario:
 
 
 def parse_observe(meta: dict[str, Any]) -> str:
-    """The camera to render, from ``{"camera": "head" (default) | "wrist"}``."""
+    """The camera to render, from ``{"camera": "head" (default) | "wrist"}``.
+
+    Args:
+        meta: the request's metadata.
+
+    Returns:
+        The camera's name.
+
+    Raises:
+        RequestError: an unknown key or camera.
+    """
     _only(meta, "observe", ("camera",))
     camera = meta.get("camera", "head")
     if camera not in CAMERAS:
@@ -134,11 +154,29 @@ def parse_observe(meta: dict[str, Any]) -> str:
 
 
 def parse_description(meta: dict[str, Any]) -> None:
+    """Check that the ``description`` request carries no fields.
+
+    Args:
+        meta: the request's metadata.
+
+    Raises:
+        RequestError: an unknown key.
+    """
     _only(meta, "description", ())
 
 
 def parse_move_base(meta: dict[str, Any]) -> tuple[list[tuple[float, float]], float | None]:
-    """(waypoints, final yaw or None) from ``{"path": [[x, y], ...], "yaw": optional radians}``."""
+    """(waypoints, final yaw or None) from ``{"path": [[x, y], ...], "yaw": optional radians}``.
+
+    Args:
+        meta: the request's metadata.
+
+    Returns:
+        The waypoints and the yaw.
+
+    Raises:
+        RequestError: naming the field that is wrong.
+    """
     _only(meta, "move_base", ("path", "yaw"))
     if "path" not in meta:
         raise RequestError("move_base.path: missing (a list of [x, y] waypoints is required)")
@@ -161,15 +199,41 @@ def parse_move_base(meta: dict[str, Any]) -> tuple[list[tuple[float, float]], fl
 
 
 def parse_arm_state(meta: dict[str, Any]) -> None:
+    """Check that the ``arm_state`` request carries no fields.
+
+    Args:
+        meta: the request's metadata.
+
+    Raises:
+        RequestError: an unknown key.
+    """
     _only(meta, "arm_state", ())
 
 
 def parse_episode_report(meta: dict[str, Any]) -> None:
+    """Check that the ``episode_report`` request carries no fields.
+
+    Args:
+        meta: the request's metadata.
+
+    Raises:
+        RequestError: an unknown key.
+    """
     _only(meta, "episode_report", ())
 
 
 def parse_gripper(meta: dict[str, Any]) -> bool:
-    """Whether to close the gripper, from ``{"action": "open" | "close"}``."""
+    """Whether to close the gripper, from ``{"action": "open" | "close"}``.
+
+    Args:
+        meta: the request's metadata.
+
+    Returns:
+        Whether to close.
+
+    Raises:
+        RequestError: the action is missing or unknown.
+    """
     _only(meta, "gripper", ("action",))
     action = meta.get("action")
     if action is None:
@@ -194,6 +258,17 @@ def parse_arm_trajectory(meta: dict[str, Any], arrays: dict[str, np.ndarray], ar
     Every sample must be finite and within the joints' position limits, and no joint may move faster
     than its velocity limit between consecutive samples. Where the first sample may start is the
     world's to check: it depends on where the arm is.
+
+    Args:
+        meta: the request's metadata.
+        arrays: the request's arrays.
+        arm: the arm's joints and limits.
+
+    Returns:
+        The request.
+
+    Raises:
+        RequestError: naming the field or sample that is wrong.
     """
     where = "arm_trajectory"
     _only(meta, where, ("dt", "stop_on_contact"))

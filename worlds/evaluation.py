@@ -43,7 +43,12 @@ ROUTE_SAMPLE_M = 0.05
 
 
 class FloorSeen:
-    """The home's free floor on a grid, and the cells of it that head frames have shown."""
+    """The home's free floor on a grid, and the cells of it that head frames have shown.
+
+    Args:
+        home: the home.
+        camera: the head camera.
+    """
 
     def __init__(self, home: HomeSpec, camera: CameraConfig) -> None:
         space = free_space(home, 0.0, FLOOR_CELL_M)
@@ -54,7 +59,11 @@ class FloorSeen:
         self._floor_ids = np.array([room.instance_id for room in home.rooms])
 
     def add(self, frame: Frame) -> None:
-        """Mark the cells under every floor pixel of ``frame`` (a head frame) as seen."""
+        """Mark the cells under every floor pixel of ``frame`` (a head frame) as seen.
+
+        Args:
+            frame: the head frame.
+        """
         rows, cols = np.nonzero(np.isin(frame.seg, self._floor_ids) & (frame.depth > 0))
         z = frame.depth[rows, cols].astype(float)
         camera = self.camera
@@ -74,7 +83,14 @@ class FloorSeen:
 
 
 class EpisodeRecord:
-    """What happened in one home episode, from the evaluator's side (see the module's notes)."""
+    """What happened in one home episode, from the evaluator's side (see the module's notes).
+
+    Args:
+        home: the home.
+        scenario: the episode's scenario.
+        camera: the head camera.
+        start: where the base starts.
+    """
 
     def __init__(self, home: HomeSpec, scenario: Scenario, camera: CameraConfig, start: Point) -> None:
         self.home = home
@@ -91,7 +107,12 @@ class EpisodeRecord:
         self._enter(start)
 
     def saw(self, frame: Frame, base_pose: Sequence[float]) -> None:
-        """A head frame taken from ``base_pose``: the target's share of it, and the floor it shows."""
+        """A head frame taken from ``base_pose``: the target's share of it, and the floor it shows.
+
+        Args:
+            frame: the head frame.
+            base_pose: where the base stood (x, y, yaw).
+        """
         share = float(np.isin(frame.seg, self._target_ids).mean())
         if share > 0:
             view = {"step": self.head_frames, "share": round(share, 5),
@@ -106,7 +127,12 @@ class EpisodeRecord:
         self.rooms_entered_by_frame.append(len(self.rooms_entered))
 
     def drove(self, route: Sequence[Point], travelled_m: float) -> None:
-        """A base move along ``route`` (`worlds.route.driven_route`), ``travelled_m`` long."""
+        """A base move along ``route`` (`worlds.route.driven_route`), ``travelled_m`` long.
+
+        Args:
+            route: the route driven.
+            travelled_m: its length.
+        """
         self.travelled_m += travelled_m
         for (x0, y0), (x1, y1) in zip(route, route[1:]):
             samples = max(1, int(np.ceil(np.hypot(x1 - x0, y1 - y0) / ROUTE_SAMPLE_M)))
@@ -119,7 +145,11 @@ class EpisodeRecord:
             self.rooms_entered.append(room)
 
     def report(self) -> dict[str, Any]:
-        """The record as the ``episode_report`` reply carries it (docs/bus.md)."""
+        """The record as the ``episode_report`` reply carries it (docs/bus.md).
+
+        Returns:
+            The report.
+        """
         return {
             "target": self.target.to_dict(),
             "target_seen": self.first_seen,

@@ -16,7 +16,11 @@ CLOSED_SHARE = 0.05
 
 
 class HomeFacts:
-    """Indexes a home's things by id and answers containment and visibility questions."""
+    """Indexes a home's things by id and answers containment and visibility questions.
+
+    Args:
+        home: the home.
+    """
 
     def __init__(self, home: HomeSpec) -> None:
         self.home = home
@@ -24,13 +28,27 @@ class HomeFacts:
         self.items = {o.instance_id: o for o in home.objects}
 
     def storage_of(self, item: Item) -> Furniture | None:
-        """The storage furniture ``item`` is (directly or through its containers) inside, if any."""
+        """The storage furniture ``item`` is (directly or through its containers) inside, if any.
+
+        Args:
+            item: the object.
+
+        Returns:
+            The storage piece, or None.
+        """
         access = self.access_of(item)
         return None if access is None else access[0]
 
     def access_of(self, item: Item) -> tuple[Furniture, str] | None:
         """The storage piece ``item`` is (directly or through its containers) inside, and the part
-        (door, drawer or flap) that opens the slot it sits in; None when it is in no storage."""
+        (door, drawer or flap) that opens the slot it sits in; None when it is in no storage.
+
+        Args:
+            item: the object.
+
+        Returns:
+            The storage piece and the part's name, or None.
+        """
         current: Item | None = item
         while current is not None and current.relation == "inside":
             parent = current.parent
@@ -45,7 +63,16 @@ class HomeFacts:
     def is_open(self, furniture: Furniture, part_name: str | None = None,
                 joints: dict[str, float] | None = None) -> bool:
         """Whether the part (any part when None) of a storage piece is opened past `CLOSED_SHARE`,
-        at the home's recorded joint states or at ``joints`` when given."""
+        at the home's recorded joint states or at ``joints`` when given.
+
+        Args:
+            furniture: the storage piece.
+            part_name: the part's name, or None for any.
+            joints: joint states to read instead of the home's.
+
+        Returns:
+            Whether it is open.
+        """
         if furniture.storage is None:
             return False
         joints = furniture.joints if joints is None else joints
@@ -53,7 +80,14 @@ class HomeFacts:
         return any(joints.get(p.name, 0.0) > p.lower + CLOSED_SHARE * (p.upper - p.lower) for p in parts)
 
     def is_hidden(self, item: Item) -> bool:
-        """Whether the object cannot be seen without opening or lifting something."""
+        """Whether the object cannot be seen without opening or lifting something.
+
+        Args:
+            item: the object.
+
+        Returns:
+            Whether it is hidden.
+        """
         if item.relation == "under":
             return True
         if item.relation != "inside" or item.parent is None:
@@ -66,10 +100,25 @@ class HomeFacts:
         return not self.is_open(furniture, furniture.storage.slot(item.slot).access)
 
     def visible_objects(self) -> list[Item]:
+        """The objects that can be seen without opening or lifting anything.
+
+        Returns:
+            The objects.
+        """
         return [o for o in self.home.objects if not self.is_hidden(o)]
 
     def storage(self) -> list[Furniture]:
+        """The furniture with storage (doors, drawers or flaps).
+
+        Returns:
+            The pieces.
+        """
         return [f for f in self.home.furniture if f.storage is not None]
 
     def appliances(self) -> list[Furniture]:
+        """The furniture that can be switched on and off.
+
+        Returns:
+            The pieces.
+        """
         return [f for f in self.home.furniture if "power" in f.state]

@@ -66,6 +66,15 @@ def split_floor(
 
     With a hallway, a 1.3-1.7 m strip runs across the whole plan first and the two halves on either
     side are cut into the other rooms, so most rooms open onto the hallway the way homes are built.
+
+    Args:
+        rng: the draws' generator.
+        n_rooms: the rooms, the hallway included.
+        area_m2: the floor area.
+        hallway: whether one room is a hallway across the plan.
+
+    Returns:
+        The outline, the rooms' rectangles and the hallway's index, or None.
     """
     aspect = rng.uniform(1.0, 1.7)
     width = round(math.sqrt(area_m2 * aspect), 1)
@@ -120,7 +129,14 @@ def _guillotine(rng: np.random.Generator, outline: Rect, count: int) -> list[Rec
 
 
 def shared_edges(rects: list[Rect]) -> list[SharedEdge]:
-    """Every stretch of wall of positive length that two rooms share."""
+    """Every stretch of wall of positive length that two rooms share.
+
+    Args:
+        rects: the rooms' rectangles.
+
+    Returns:
+        The shared edges.
+    """
     edges = []
     for i, a in enumerate(rects):
         for j in range(i + 1, len(rects)):
@@ -143,6 +159,15 @@ def pick_doors(
     """A random spanning tree of doors over rooms, plus a few extra; None if rooms can't connect.
 
     Doors onto the ``hub`` room (the hallway) are preferred, so the hallway serves most rooms.
+
+    Args:
+        rng: the draws' generator.
+        n_rooms: the rooms.
+        edges: the walls they share.
+        hub: the hallway's index, if any.
+
+    Returns:
+        The doors, or None.
     """
     capable = [e for e in edges if e.length >= DOOR_WIDTH[1] + 2 * DOOR_MARGIN]
     visited = {hub if hub is not None else int(rng.integers(n_rooms))}
@@ -175,6 +200,14 @@ def wall_boxes(outline: Rect, edges: list[SharedEdge], doors: list[Door]) -> lis
 
     Each piece reaches half a wall thickness past the ends of its line so corners close; pieces end
     exactly at door jambs so the doorway keeps its full width.
+
+    Args:
+        outline: the home's outline.
+        edges: the shared walls.
+        doors: the doors.
+
+    Returns:
+        The boxes.
     """
     x0, y0, x1, y1 = outline
     lines = [("x", y0, x0, x1), ("x", y1, x0, x1), ("y", x0, y0, y1), ("y", x1, y0, y1)]

@@ -32,17 +32,38 @@ class FreeSpace:
     room_of_cell: np.ndarray  # (ny, nx) index into home.rooms, -1 outside every room
 
     def cell_centre(self, row: int, col: int) -> tuple[float, float]:
+        """The world (x, y) of a cell's centre.
+
+        Args:
+            row: the cell's row.
+            col: the cell's column.
+
+        Returns:
+            The centre.
+        """
         return (self.origin[0] + (col + 0.5) * self.resolution, self.origin[1] + (row + 0.5) * self.resolution)
 
     def cell_at(self, x: float, y: float) -> tuple[int, int]:
-        """(row, col) of the cell holding (x, y), clamped to the grid."""
+        """(row, col) of the cell holding (x, y), clamped to the grid.
+
+        Args:
+            x: the point's x (m).
+            y: the point's y (m).
+
+        Returns:
+            The cell.
+        """
         rows, cols = self.components.shape
         col = int(np.clip((x - self.origin[0]) // self.resolution, 0, cols - 1))
         row = int(np.clip((y - self.origin[1]) // self.resolution, 0, rows - 1))
         return row, col
 
     def main_component(self) -> int:
-        """The component touching the most rooms (ties: the larger one); 0 if nothing is free."""
+        """The component touching the most rooms (ties: the larger one); 0 if nothing is free.
+
+        Returns:
+            The component's label.
+        """
         best, best_key = 0, (0, 0)
         for label in range(1, int(self.components.max()) + 1):
             cells = self.components == label
@@ -54,7 +75,16 @@ class FreeSpace:
 
 
 def free_space(home: HomeSpec, radius: float, resolution: float = RESOLUTION) -> FreeSpace:
-    """Rasterise ``home`` and find where a disc of ``radius`` fits, conservatively by half a cell."""
+    """Rasterise ``home`` and find where a disc of ``radius`` fits, conservatively by half a cell.
+
+    Args:
+        home: the home.
+        radius: the disc's radius (the robot's).
+        resolution: the cell size (m).
+
+    Returns:
+        The free space: its components and the room of each cell.
+    """
     x0, y0, x1, y1 = home.bounds
     nx, ny = int(np.ceil((x1 - x0) / resolution)), int(np.ceil((y1 - y0) / resolution))
     xs = x0 + (np.arange(nx) + 0.5) * resolution
@@ -76,7 +106,16 @@ def free_space(home: HomeSpec, radius: float, resolution: float = RESOLUTION) ->
 
 
 def reachable_rooms(home: HomeSpec, radius: float, resolution: float = RESOLUTION) -> set[str]:
-    """Names of the rooms a disc of ``radius`` can reach from the best-connected free region."""
+    """Names of the rooms a disc of ``radius`` can reach from the best-connected free region.
+
+    Args:
+        home: the home.
+        radius: the disc's radius (the robot's).
+        resolution: the cell size (m).
+
+    Returns:
+        The rooms' names.
+    """
     space = free_space(home, radius, resolution)
     main = space.main_component()
     if main == 0:
@@ -86,5 +125,14 @@ def reachable_rooms(home: HomeSpec, radius: float, resolution: float = RESOLUTIO
 
 
 def clearance(home: HomeSpec, x: float, y: float) -> float:
-    """Exact distance from (x, y) to the nearest wall, furniture or floor object footprint."""
+    """Exact distance from (x, y) to the nearest wall, furniture or floor object footprint.
+
+    Args:
+        home: the home.
+        x: the point's x (m).
+        y: the point's y (m).
+
+    Returns:
+        The distance (m).
+    """
     return min(point_rect_distance(x, y, rect) for rect in home.obstacles())

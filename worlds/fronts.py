@@ -19,19 +19,47 @@ Vec3 = tuple[float, float, float]
 
 
 def to_world(center: tuple[float, ...], facing: float, x: float, y: float) -> tuple[float, float]:
-    """A point of a piece's local frame (front facing -y) in the world plane."""
+    """A point of a piece's local frame (front facing -y) in the world plane.
+
+    Args:
+        center: the piece's centre.
+        facing: the way it faces.
+        x: the point's local x.
+        y: the point's local y.
+
+    Returns:
+        The world point.
+    """
     yaw = yaw_facing(facing)
     c, s = round(math.cos(yaw)), round(math.sin(yaw))  # quarter turns only: exact
     return (center[0] + c * x - s * y, center[1] + s * x + c * y)
 
 
 def rect_to_world(center: tuple[float, ...], facing: float, rect: Rect) -> Rect:
+    """A rectangle of a piece's local frame (front facing -y) in the world plane.
+
+    Args:
+        center: the piece's centre.
+        facing: the way it faces.
+        rect: the local rectangle.
+
+    Returns:
+        The world rectangle.
+    """
     (ax, ay), (bx, by) = to_world(center, facing, rect[0], rect[1]), to_world(center, facing, rect[2], rect[3])
     return (min(ax, bx), min(ay, by), max(ax, bx), max(ay, by))
 
 
 def world_size(size: Vec3, facing: float) -> Vec3:
-    """The world-aligned size of a piece of local ``size`` (width, depth, height) facing ``facing``."""
+    """The world-aligned size of a piece of local ``size`` (width, depth, height) facing ``facing``.
+
+    Args:
+        size: the local size.
+        facing: the way the piece faces.
+
+    Returns:
+        The world size.
+    """
     across = abs(round(math.cos(yaw_facing(facing)))) == 1
     return size if across else (size[1], size[0], size[2])
 
@@ -61,7 +89,18 @@ def _union(rects: list[Rect]) -> Rect:
 
 def use_zone(center: tuple[float, ...], facing: float, size: Vec3, model: StorageModel | None, stand: float) -> Rect:
     """The world rectangle kept clear in front of a piece: ``stand`` metres deep in front of its face,
-    and for storage in front of everything its parts sweep when opened all the way (local ``size``)."""
+    and for storage in front of everything its parts sweep when opened all the way (local ``size``).
+
+    Args:
+        center: the piece's centre.
+        facing: the way it faces.
+        size: its local size.
+        model: its storage model, if any.
+        stand: the room to stand in front (m).
+
+    Returns:
+        The rectangle.
+    """
     width, depth = size[0], size[1]
     local = [(-width / 2, -depth / 2 - stand, width / 2, -depth / 2)]
     swept = [] if model is None else [r for p in model.parts if (r := _part_rect(p, depth, p.upper, sweep=True))]
@@ -72,7 +111,14 @@ def use_zone(center: tuple[float, ...], facing: float, size: Vec3, model: Storag
 
 
 def storage_obstacles(piece: Furniture) -> list[Rect]:
-    """World rectangles in front of a storage piece's body: its closed handles and its open parts."""
+    """World rectangles in front of a storage piece's body: its closed handles and its open parts.
+
+    Args:
+        piece: the furniture piece.
+
+    Returns:
+        The rectangles (none without storage).
+    """
     if piece.storage is None:
         return []
     width, depth = piece.storage.size[0], piece.storage.size[1]
@@ -85,7 +131,14 @@ def storage_obstacles(piece: Furniture) -> list[Rect]:
 
 
 def front_reach(model: StorageModel | None) -> float:
-    """How far in front of the body any part of ``model`` reaches when opened all the way, in metres."""
+    """How far in front of the body any part of ``model`` reaches when opened all the way, in metres.
+
+    Args:
+        model: the storage model, or None.
+
+    Returns:
+        The reach (0 without storage).
+    """
     if model is None:
         return 0.0
     depth = model.size[1]
@@ -94,13 +147,29 @@ def front_reach(model: StorageModel | None) -> float:
 
 
 def stand_point(piece: Furniture, beyond: float) -> tuple[float, float]:
-    """The point in front of the middle of ``piece``, ``beyond`` metres past where its parts reach."""
+    """The point in front of the middle of ``piece``, ``beyond`` metres past where its parts reach.
+
+    Args:
+        piece: the furniture piece.
+        beyond: how far past its parts' reach.
+
+    Returns:
+        The point.
+    """
     depth = piece.storage.size[1] if piece.storage is not None else world_size(piece.size, piece.facing)[1]
     return to_world(piece.center, piece.facing, 0.0, -depth / 2 - front_reach(piece.storage) - beyond)
 
 
 def slot_box(piece: Furniture, name: str) -> tuple[Vec3, Vec3]:
-    """World (centre, size) of slot ``name`` of ``piece``, moved out with its drawer if that is open."""
+    """World (centre, size) of slot ``name`` of ``piece``, moved out with its drawer if that is open.
+
+    Args:
+        piece: the storage piece.
+        name: the slot's name.
+
+    Returns:
+        The slot's centre and size.
+    """
     assert piece.storage is not None, f"{piece.category} {piece.instance_id} has no storage"
     slot = piece.storage.slot(name)
     pulled = piece.joints.get(slot.part, 0.0) if slot.part is not None else 0.0

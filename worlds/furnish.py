@@ -63,6 +63,16 @@ def furnish_room(
 
     ``outside`` holds the sides of the room on the home's outline (0 south, 1 north, 2 west,
     3 east), where curtains may hang; ``zones`` are rectangles nothing may stand in.
+
+    Args:
+        rng: the draws' generator.
+        room: the room.
+        outside: its sides on the outline.
+        zones: where nothing may stand.
+        first_id: the first piece's id.
+
+    Returns:
+        The pieces, or None.
     """
     placed: list[Furniture] = []
     for k, category in enumerate(_wanted(rng, room)):
@@ -75,7 +85,14 @@ def furnish_room(
 
 
 def clear_zone(piece: Furniture) -> Rect:
-    """The rectangle in front of ``piece`` kept clear: what its parts sweep and room to stand."""
+    """The rectangle in front of ``piece`` kept clear: what its parts sweep and room to stand.
+
+    Args:
+        piece: the furniture piece.
+
+    Returns:
+        The rectangle.
+    """
     size = world_size(piece.size, piece.facing)  # back to the piece's own (width, depth, height)
     return use_zone(piece.center, piece.facing, size, piece.storage, _stand(piece.category))
 
@@ -207,6 +224,17 @@ def against_wall(
     """A footprint of ``length`` along wall ``side`` (0 south, 1 north, 2 west, 3 east), ``depth`` deep.
 
     It starts at ``start`` along the wall, or at a random place when None.
+
+    Args:
+        rng: the draws' generator.
+        inner: the room's inner rectangle.
+        side: the wall.
+        length: the footprint's length along it.
+        depth: its depth.
+        start: where it starts along the wall, or None.
+
+    Returns:
+        The footprint, or None when it does not fit.
     """
     x0, y0, x1, y1 = inner
     along_lo, along_hi = (x0, x1) if side < 2 else (y0, y1)

@@ -75,13 +75,21 @@ class HomeSpec:
                 max(r[2] for r in rects), max(r[3] for r in rects))
 
     def labels(self) -> dict[int, Label]:
-        """The ground-truth label of every instance id, storage parts and handles included."""
+        """The ground-truth label of every instance id, storage parts and handles included.
+
+        Returns:
+            The labels by id.
+        """
         things = (*self.rooms, *self.walls, *self.furniture, *self.objects)
         return {**{thing.instance_id: thing.label() for thing in things}, **home_part_labels(self)}
 
     def obstacles(self) -> list[Rect]:
         """Footprints a robot on the floor can bump into: walls, furniture with its handles and open
-        parts, and objects on the floor (what is inside or under them stays within them)."""
+        parts, and objects on the floor (what is inside or under them stays within them).
+
+        Returns:
+            The footprints.
+        """
         return [
             *(w.footprint for w in self.walls),
             *(f.footprint for f in self.furniture),
@@ -90,17 +98,40 @@ class HomeSpec:
         ]
 
     def room_at(self, x: float, y: float) -> str | None:
+        """The name of the room holding (x, y); None outside every room.
+
+        Args:
+            x: the point's x (m).
+            y: the point's y (m).
+
+        Returns:
+            The name, or None.
+        """
         return next((room.name for room in self.rooms if room.contains(x, y)), None)
 
     def to_dict(self) -> dict[str, Any]:
-        """The home's scene spec (worlds.spec, the versioned JSON document)."""
+        """The home's scene spec (worlds.spec, the versioned JSON document).
+
+        Returns:
+            The spec.
+        """
         from worlds.spec import dump_spec  # the spec module builds on this one
 
         return dump_spec(self)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> HomeSpec:
-        """A home from its scene spec, checked field by field (worlds.spec.SpecError when malformed)."""
+        """A home from its scene spec, checked field by field (worlds.spec.SpecError when malformed).
+
+        Args:
+            data: the scene spec.
+
+        Returns:
+            The home.
+
+        Raises:
+            SpecError: the spec is malformed.
+        """
         from worlds.spec import load_spec
 
         return load_spec(data)
@@ -108,7 +139,19 @@ class HomeSpec:
 
 def generate_home(seed: int, n_rooms: int | None = None, area_m2: float | None = None) -> HomeSpec:
     """A home of ``n_rooms`` rooms (4-10) and about ``area_m2`` square metres (60-300), every room
-    and every storage front reachable by the robot. Either may be None: it is drawn from the seed."""
+    and every storage front reachable by the robot. Either may be None: it is drawn from the seed.
+
+    Args:
+        seed: the home's seed (≥ 0).
+        n_rooms: the rooms, or None.
+        area_m2: the floor area, or None.
+
+    Returns:
+        The home.
+
+    Raises:
+        ValueError: a seed, room count or area out of range.
+    """
     if seed < 0:
         raise ValueError(f"seed: {seed} must not be negative")
     if n_rooms is not None and not ROOM_COUNT[0] <= n_rooms <= ROOM_COUNT[1]:
@@ -142,7 +185,15 @@ def _size(rng: np.random.Generator, n_rooms: int | None, area_m2: float | None) 
 
 
 def room_kinds(rng: np.random.Generator, count: int) -> list[str]:
-    """The kinds of a home's ``count`` rooms: `BASE_ROOMS` and extras drawn by weight."""
+    """The kinds of a home's ``count`` rooms: `BASE_ROOMS` and extras drawn by weight.
+
+    Args:
+        rng: the draws' generator.
+        count: the rooms.
+
+    Returns:
+        The kinds.
+    """
     weights = np.array([weight for _, weight in EXTRA_ROOMS])
     drawn = rng.choice(len(EXTRA_ROOMS), size=count - len(BASE_ROOMS), replace=False, p=weights / weights.sum())
     return [*BASE_ROOMS, *(EXTRA_ROOMS[int(i)][0] for i in drawn)]

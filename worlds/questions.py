@@ -56,7 +56,14 @@ TEMPLATES: tuple[Template, ...] = (
 
 
 def plural(word: str) -> str:
-    """English plural of a vocabulary noun (mug -> mugs, box -> boxes, toothbrush -> toothbrushes)."""
+    """English plural of a vocabulary noun (mug -> mugs, box -> boxes, toothbrush -> toothbrushes).
+
+    Args:
+        word: the noun.
+
+    Returns:
+        Its plural.
+    """
     if word.endswith(("s", "x", "ch", "sh")):
         return word + "es"
     if word.endswith("y") and word[-2:-1] not in "aeiou":
@@ -102,7 +109,14 @@ def _patterns() -> tuple[tuple[Template, re.Pattern[str], dict[str, str]], ...]:
 
 
 def parse_question(text: str) -> ParsedQuestion | None:
-    """Read a question with the vocabulary; None when it matches no template."""
+    """Read a question with the vocabulary; None when it matches no template.
+
+    Args:
+        text: the question.
+
+    Returns:
+        The template and its slots, or None.
+    """
     for template, pattern, plurals in _patterns():
         match = pattern.match(text.strip())
         if match:
@@ -114,7 +128,15 @@ def parse_question(text: str) -> ParsedQuestion | None:
 
 
 def format_question(template: Template, **slots: str) -> str:
-    """The template's text with its slots filled (``category`` also fills ``{plural}``)."""
+    """The template's text with its slots filled (``category`` also fills ``{plural}``).
+
+    Args:
+        template: the template.
+        **slots: the slots' values.
+
+    Returns:
+        The question.
+    """
     if "category" in slots:
         slots = {**slots, "plural": plural(slots["category"])}
     return template.text.format(**slots)

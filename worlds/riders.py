@@ -27,7 +27,13 @@ Carrier = Drawer | int  # a drawer, or the instance id of an object
 
 
 class Riders:
-    """The carriers of one built scene's small objects, and the drawer positions last seen."""
+    """The carriers of one built scene's small objects, and the drawer positions last seen.
+
+    Args:
+        client: the PyBullet client.
+        built: the built scene.
+        parents: each object's parent instance id.
+    """
 
     def __init__(self, client: int, built: BuiltScene, parents: Mapping[int, int | None]) -> None:
         """``parents``: each object's parent instance id (a piece of furniture, an object, or None)."""
@@ -59,7 +65,14 @@ class Riders:
         return float(p.getJointState(piece.body, piece.links[drawer[1]], physicsClientId=self.client)[0])
 
     def drawer_of(self, item_id: int) -> Drawer | None:
-        """The drawer ``item_id`` rides on, through its chain of carriers, if any."""
+        """The drawer ``item_id`` rides on, through its chain of carriers, if any.
+
+        Args:
+            item_id: the object's id.
+
+        Returns:
+            The drawer, or None.
+        """
         carrier = self._carrier.get(item_id)
         seen = {item_id}
         while isinstance(carrier, int) and carrier not in seen:
@@ -68,7 +81,14 @@ class Riders:
         return carrier if isinstance(carrier, tuple) else None
 
     def riders(self, drawer: Drawer) -> set[int]:
-        """Every object riding on ``drawer``, directly or through other objects."""
+        """Every object riding on ``drawer``, directly or through other objects.
+
+        Args:
+            drawer: the drawer.
+
+        Returns:
+            The objects' ids.
+        """
         return {item_id for item_id in self._carrier if self.drawer_of(item_id) == drawer}
 
     def sync(self) -> None:
@@ -89,7 +109,11 @@ class Riders:
                                               physicsClientId=self.client)
 
     def lift(self, item_id: int) -> None:
-        """``item_id`` leaves its carrier (the robot picked it); what it carried stays, on its old carrier."""
+        """``item_id`` leaves its carrier (the robot picked it); what it carried stays, on its old carrier.
+
+        Args:
+            item_id: the object's id.
+        """
         self._collide(item_id, self.drawer_of(item_id), True)
         old = self._carrier.pop(item_id, None)
         for other, carrier in list(self._carrier.items()):
@@ -100,7 +124,12 @@ class Riders:
                     self._carrier[other] = old
 
     def put(self, item_id: int, support: tuple[int, int] | None) -> None:
-        """``item_id`` now stands on ``support`` (body, link): a drawer's link, an object, or anything else."""
+        """``item_id`` now stands on ``support`` (body, link): a drawer's link, an object, or anything else.
+
+        Args:
+            item_id: the object's id.
+            support: what it stands on (body, link), or None.
+        """
         carrier: Carrier | None = None
         if support is not None:
             body, link = support

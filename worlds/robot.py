@@ -83,11 +83,19 @@ class CameraConfig:
         return math.degrees(2 * math.atan((self.height / 2) / self.fy))
 
     def intrinsics(self) -> tuple[float, float, float, float]:
-        """(fx, fy, cx, cy) in pixels."""
+        """(fx, fy, cx, cy) in pixels.
+
+        Returns:
+            The intrinsics.
+        """
         return (self.fx, self.fy, self.cx, self.cy)
 
     def to_dict(self) -> dict[str, Any]:
-        """The camera as observations describe it."""
+        """The camera as observations describe it.
+
+        Returns:
+            The camera's size and intrinsics.
+        """
         return {
             "width": self.width,
             "height": self.height,
@@ -106,6 +114,13 @@ def camera_pose(base_pose: tuple[float, float, float], camera: CameraConfig) -> 
 
     The camera sits on the base's vertical axis at ``mount_height_m``, looking along the base's
     heading, pitched by ``pitch_deg``.
+
+    Args:
+        base_pose: the base's pose.
+        camera: the camera's mount.
+
+    Returns:
+        The transform.
     """
     x, y, yaw = base_pose
     pitch = math.radians(camera.pitch_deg)
@@ -124,6 +139,13 @@ def robot_urdf(camera: CameraConfig, arm: str = "") -> str:
     ``arm`` is more URDF (links and joints hanging off ``base_link``) put in after the head camera;
     `worlds.robot_arm.homebot_urdf` passes the lift, the Panda and its wrist camera here, so the
     base and head camera read the same with the arm as without it.
+
+    Args:
+        camera: the head camera.
+        arm: more URDF, or "".
+
+    Returns:
+        The URDF.
     """
     body = (
         f'<origin xyz="0 0 {ROBOT_HEIGHT / 2}"/>'
@@ -158,7 +180,14 @@ def _inertia(mass: float) -> str:
 
 
 def description(camera: CameraConfig) -> dict[str, Any]:
-    """What ``<ns>/world/robot/description`` answers."""
+    """What ``<ns>/world/robot/description`` answers.
+
+    Args:
+        camera: the head camera.
+
+    Returns:
+        The description.
+    """
     return {
         "robot": {"radius": ROBOT_RADIUS, "height": ROBOT_HEIGHT},
         "camera": {**camera.to_dict(), "mount_height_m": camera.mount_height_m, "pitch_deg": camera.pitch_deg},

@@ -94,11 +94,22 @@ class ArmSpec:
         return tuple(joint.name for joint in self.joints)
 
     def column(self, field: str) -> np.ndarray:
-        """One limit for every joint, in order: ``arm.column("velocity")``."""
+        """One limit for every joint, in order: ``arm.column("velocity")``.
+
+        Args:
+            field: the limit's name.
+
+        Returns:
+            The limits.
+        """
         return np.array([getattr(joint, field) for joint in self.joints], dtype=float)
 
     def to_dict(self) -> dict[str, Any]:
-        """The arm as the robot description tells it."""
+        """The arm as the robot description tells it.
+
+        Returns:
+            The joints, the TCP frame, the stowed pose and the fingers.
+        """
         return {
             "joints": [vars(joint) for joint in self.joints],
             "tcp_frame": self.tcp_frame,
@@ -117,7 +128,11 @@ def _panda() -> ET.Element:
 
 @cache
 def arm_spec() -> ArmSpec:
-    """The lift and the Panda's seven joints, position, velocity and effort limits from panda.urdf."""
+    """The lift and the Panda's seven joints, position, velocity and effort limits from panda.urdf.
+
+    Returns:
+        The arm's spec.
+    """
     limits = {
         joint.get("name"): joint.find("limit") for joint in _panda().iter("joint") if joint.find("limit") is not None
     }
@@ -181,13 +196,28 @@ def _arm_urdf() -> str:
 
 
 def homebot_urdf(camera: CameraConfig) -> str:
-    """The whole robot: the base and head camera of `worlds.robot.robot_urdf`, the lift and the arm."""
+    """The whole robot: the base and head camera of `worlds.robot.robot_urdf`, the lift and the arm.
+
+    Args:
+        camera: the head camera.
+
+    Returns:
+        The URDF.
+    """
     return robot_urdf(camera, _arm_urdf())
 
 
 def robot_description(camera: CameraConfig, wrist: CameraConfig = WRIST_CAMERA) -> dict[str, Any]:
     """What ``<ns>/world/robot/description`` answers: the base's description with the whole robot's
-    URDF, the arm's joints and limits, and the wrist camera's intrinsics."""
+    URDF, the arm's joints and limits, and the wrist camera's intrinsics.
+
+    Args:
+        camera: the head camera.
+        wrist: the wrist camera.
+
+    Returns:
+        The description.
+    """
     return {
         **description(camera),
         "urdf": homebot_urdf(camera),

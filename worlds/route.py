@@ -22,7 +22,17 @@ Point = tuple[float, float]
 
 def driven_route(start: Point, path: Sequence[Point], travelled_m: float, end: Point) -> list[Point]:
     """Start, every waypoint within the first ``travelled_m`` metres of the path, and ``end``
-    (where the base stopped, which replaces a last waypoint it stands on)."""
+    (where the base stopped, which replaces a last waypoint it stands on).
+
+    Args:
+        start: where the base started.
+        path: the waypoints it was sent along.
+        travelled_m: how far it went.
+        end: where it stopped.
+
+    Returns:
+        The route.
+    """
     route, here, left = [start], start, travelled_m
     for waypoint in path:
         length = math.dist(here, waypoint)

@@ -56,6 +56,11 @@ class Scenario:
     start_pose: tuple[float, float, float]
 
     def to_dict(self) -> dict[str, Any]:
+        """The scenario as plain data, for suites and results.
+
+        Returns:
+            The dict.
+        """
         return {
             "seed": self.seed,
             "question": self.question,
@@ -71,11 +76,26 @@ class Scenario:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Scenario:
+        """A scenario read back from its `to_dict` form.
+
+        Args:
+            data: the dict.
+
+        Returns:
+            The scenario.
+        """
         return cls(**{**data, "choices": tuple(data["choices"]), "start_pose": tuple(data["start_pose"])})
 
 
 def budget_for(area_m2: float) -> int:
-    """The paper's step budget T = int(3 * sqrt(area))."""
+    """The paper's step budget T = int(3 * sqrt(area)).
+
+    Args:
+        area_m2: the home's floor area.
+
+    Returns:
+        T, in steps.
+    """
     return int(3 * math.sqrt(area_m2))
 
 
@@ -85,6 +105,19 @@ def make_scenario(home: HomeSpec, seed: int, kinds: tuple[str, ...] | None = Non
 
     ``kinds`` limits the categories (default: all, drawn with the paper's shares); ``hidden``
     True asks only hidden-evidence questions, False never, None either.
+
+    Args:
+        home: the home.
+        seed: the draws' seed.
+        kinds: the question categories allowed (all when None).
+        hidden: whether to ask hidden-evidence questions only, never, or either (None).
+
+    Returns:
+        The scenario.
+
+    Raises:
+        ValueError: no template has those kinds.
+        RuntimeError: the home answers no such question unambiguously.
     """
     rng = np.random.default_rng([seed, _SCENARIO_STREAM])
     facts = HomeFacts(home)
@@ -144,7 +177,14 @@ def _words_but(rng: np.random.Generator, words: list[str], answer: str, preferre
 
 def nameable_rooms(home: HomeSpec) -> set[str]:
     """The rooms a question may name: those whose kind the home has once (and whose name is then
-    that kind). "The bedroom" of a home with two is not a room any camera could pick out."""
+    that kind). "The bedroom" of a home with two is not a room any camera could pick out.
+
+    Args:
+        home: the home.
+
+    Returns:
+        The rooms' names.
+    """
     kinds = Counter(room.kind for room in home.rooms)
     return {room.name for room in home.rooms if kinds[room.kind] == 1}
 
@@ -304,7 +344,18 @@ _DRAWERS: dict[str, Callable[[np.random.Generator, HomeFacts], Draw | None]] = {
 
 
 def start_pose(home: HomeSpec, rng: np.random.Generator) -> tuple[float, float, float]:
-    """A pose in the home's connected free space, at least `START_CLEARANCE` from any obstacle."""
+    """A pose in the home's connected free space, at least `START_CLEARANCE` from any obstacle.
+
+    Args:
+        home: the home.
+        rng: the draws' generator.
+
+    Returns:
+        The pose (x, y, yaw).
+
+    Raises:
+        RuntimeError: no spot is that clear.
+    """
     space = free_space(home, ROBOT_RADIUS)
     main = space.main_component()
     rows, cols = np.nonzero((space.components == main) & (space.clearance_m >= START_CLEARANCE + space.resolution))

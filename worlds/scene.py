@@ -62,7 +62,17 @@ def _pale(colour: str, amount: float) -> tuple[float, float, float, float]:
 
 
 def add_box(client: int, center: Sequence[float], size: Sequence[float], rgba: Sequence[float]) -> int:
-    """A static box body."""
+    """A static box body.
+
+    Args:
+        client: the PyBullet client.
+        center: the box's centre.
+        size: its size.
+        rgba: its colour.
+
+    Returns:
+        The body id.
+    """
     half = [s / 2 for s in size]
     collision = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client)
     visual = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=client)
@@ -71,7 +81,17 @@ def add_box(client: int, center: Sequence[float], size: Sequence[float], rgba: S
 
 def add_boxes(client: int, origin: Sequence[float], boxes: Sequence[tuple[Sequence[float], Sequence[float]]],
               rgba: Sequence[float]) -> int:
-    """A static single-link body made of several boxes, each (centre relative to ``origin``, size)."""
+    """A static single-link body made of several boxes, each (centre relative to ``origin``, size).
+
+    Args:
+        client: the PyBullet client.
+        origin: the body's origin.
+        boxes: the boxes.
+        rgba: their colour.
+
+    Returns:
+        The body id.
+    """
     halves = [[s / 2 for s in size] for _, size in boxes]
     centres = [list(centre) for centre, _ in boxes]
     kinds = [p.GEOM_BOX] * len(boxes)
@@ -83,7 +103,18 @@ def add_boxes(client: int, origin: Sequence[float], boxes: Sequence[tuple[Sequen
 
 
 def add_shape(client: int, shape: str, dims: Sequence[float], center: Sequence[float], rgba: Sequence[float]) -> int:
-    """A static body: a box (x, y, z), an upright cylinder (radius, height) or a sphere (radius)."""
+    """A static body: a box (x, y, z), an upright cylinder (radius, height) or a sphere (radius).
+
+    Args:
+        client: the PyBullet client.
+        shape: "box", "cylinder", or anything else for a sphere.
+        dims: its dimensions.
+        center: its centre.
+        rgba: its colour.
+
+    Returns:
+        The body id.
+    """
     if shape == "box":
         return add_box(client, center, dims, rgba)
     if shape == "cylinder":
@@ -98,13 +129,31 @@ def add_shape(client: int, shape: str, dims: Sequence[float], center: Sequence[f
 
 
 def add_item(client: int, item: Item) -> int:
-    """A static body for a small object of the home."""
+    """A static body for a small object of the home.
+
+    Args:
+        client: the PyBullet client.
+        item: the object.
+
+    Returns:
+        The body id.
+    """
     return add_shape(client, item.shape, item.dims, item.center, COLOURS[item.colour])
 
 
 def add_visuals(client: int, center: Sequence[float], size: Sequence[float], visuals: Sequence[Visual]) -> int:
     """A static body that collides as one box of ``size`` and looks like ``visuals`` (worlds.appearance:
-    a lamp's glowing shade, a TV's lit screen), one body so the whole thing carries one label."""
+    a lamp's glowing shade, a TV's lit screen), one body so the whole thing carries one label.
+
+    Args:
+        client: the PyBullet client.
+        center: the body's centre.
+        size: its collision box's size.
+        visuals: what it looks like.
+
+    Returns:
+        The body id.
+    """
     kinds = {"box": p.GEOM_BOX, "cylinder": p.GEOM_CYLINDER, "sphere": p.GEOM_SPHERE}
     collision = p.createCollisionShape(p.GEOM_BOX, halfExtents=[s / 2 for s in size], physicsClientId=client)
     visual = p.createVisualShapeArray(
@@ -120,7 +169,14 @@ def add_visuals(client: int, center: Sequence[float], size: Sequence[float], vis
 
 
 def urdf_file(text: str) -> Path:
-    """The cached file holding ``text``, written once per content (atomically, so parallel runs agree)."""
+    """The cached file holding ``text``, written once per content (atomically, so parallel runs agree).
+
+    Args:
+        text: the URDF.
+
+    Returns:
+        The file's path.
+    """
     path = URDF_CACHE / f"{hashlib.sha256(text.encode()).hexdigest()[:20]}.urdf"
     if not path.exists():
         URDF_CACHE.mkdir(parents=True, exist_ok=True)
@@ -132,7 +188,15 @@ def urdf_file(text: str) -> Path:
 
 
 def link_indices(client: int, body: int) -> dict[str, int]:
-    """Link name -> link index (the index of the joint whose child it is)."""
+    """Link name -> link index (the index of the joint whose child it is).
+
+    Args:
+        client: the PyBullet client.
+        body: the body.
+
+    Returns:
+        The indices by link name.
+    """
     return {
         p.getJointInfo(body, j, physicsClientId=client)[12].decode(): j
         for j in range(p.getNumJoints(body, physicsClientId=client))
@@ -152,6 +216,20 @@ def load_storage(
     PyBullet's default velocity motors would hold every joint rigidly; instead each joint gets a
     zero-velocity motor whose force is the joint's friction, so a part stays where it is left (a
     flap against gravity too) and still gives way to a push stronger than that friction.
+
+    Args:
+        client: the PyBullet client.
+        model: the storage model.
+        rgba: the carcass's and parts' colour.
+        pose_xyz_yaw: where it stands (x, y, z, yaw).
+        states: each part's joint value.
+        handle_rgba: the handles' colour.
+
+    Returns:
+        The body id.
+
+    Raises:
+        ValueError: a state for a part the model does not have, or out of the part's range.
     """
     states = dict(states or {})
     unknown = set(states) - {part.name for part in model.parts}
@@ -174,7 +252,16 @@ def load_storage(
 
 
 def add_storage(client: int, placement: StoragePlacement, label: Label) -> tuple[StorageBody, SegLabels]:
-    """Load a placed piece; its carcass carries ``label``, each part and handle a label of its own."""
+    """Load a placed piece; its carcass carries ``label``, each part and handle a label of its own.
+
+    Args:
+        client: the PyBullet client.
+        placement: the placed piece.
+        label: the carcass's label.
+
+    Returns:
+        The body and its links' labels.
+    """
     colour = label["colour"]
     body = load_storage(client, placement.model, COLOURS[colour], placement.pose, dict(placement.states),
                         COLOURS[handle_colour(colour)])
@@ -186,7 +273,15 @@ def add_storage(client: int, placement: StoragePlacement, label: Label) -> tuple
 
 
 def build_scene(home: HomeSpec, client: int) -> BuiltScene:
-    """Add ``home`` to the (empty) simulation ``client``; storage furniture is loaded articulated."""
+    """Add ``home`` to the (empty) simulation ``client``; storage furniture is loaded articulated.
+
+    Args:
+        home: the home.
+        client: the PyBullet client.
+
+    Returns:
+        The bodies and their labels.
+    """
     built = BuiltScene()
     placed = {placement.furniture_id: placement for placement in home_storage(home)}
     for room in home.rooms:
@@ -213,5 +308,12 @@ def build_scene(home: HomeSpec, client: int) -> BuiltScene:
 
 
 def floor_bodies(labels: SegLabels) -> set[int]:
-    """The bodies the robot stands on, which never count as collisions."""
+    """The bodies the robot stands on, which never count as collisions.
+
+    Args:
+        labels: the labels by body and link.
+
+    Returns:
+        The floors' body ids.
+    """
     return {body for (body, _), label in labels.items() if label["category"] == "floor"}

@@ -36,7 +36,14 @@ BENCH_VIEWS = 8
 
 
 def summary(home: HomeSpec) -> str:
-    """One line about a home: its size and what is in it."""
+    """One line about a home: its size and what is in it.
+
+    Args:
+        home: the home.
+
+    Returns:
+        The line.
+    """
     storage = sum(piece.storage is not None for piece in home.furniture)
     hidden = sum(item.relation in ("inside", "under") for item in home.objects)
     return (f"seed {home.seed}: {len(home.rooms)} rooms, {home.area_m2:.1f} m², {len(home.doorways)} doorways, "
@@ -62,7 +69,14 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one scene command; 0 on success, 1 for an invalid spec, 2 for bad arguments."""
+    """Run one scene command; 0 on success, 1 for an invalid spec, 2 for bad arguments.
+
+    Args:
+        argv: the command line's arguments (``sys.argv[1:]`` when None).
+
+    Returns:
+        The exit status.
+    """
     try:
         args = _parser().parse_args(argv)
     except SystemExit as exit_:
@@ -100,7 +114,14 @@ def _new(seed: int, rooms: int | None, area: float | None, out: Path | None) -> 
 
 
 def open_pose(home: HomeSpec) -> tuple[float, float]:
-    """The most open spot the robot can reach: the free cell farthest from any obstacle."""
+    """The most open spot the robot can reach: the free cell farthest from any obstacle.
+
+    Args:
+        home: the home.
+
+    Returns:
+        The spot (x, y).
+    """
     space = free_space(home, ROBOT_RADIUS)
     clearance = np.where(space.components == space.main_component(), space.clearance_m, -1.0)
     row, col = np.unravel_index(int(np.argmax(clearance)), clearance.shape)
@@ -112,6 +133,13 @@ def bench_world(areas: tuple[float, ...] = (60.0, 150.0, 300.0), repeats: int = 
 
     Each area is measured on seeds 0..repeats-1; the figures are medians over those homes.
     Rendering looks around from the most open reachable spot in `BENCH_VIEWS` headings.
+
+    Args:
+        areas: the floor areas (m²).
+        repeats: the homes per area.
+
+    Returns:
+        The report: medians by area.
     """
     camera = CameraConfig(width=320, height=240)
     world = World(camera)

@@ -55,7 +55,14 @@ def _storage(piece: Furniture) -> dict[str, Any] | None:
 
 
 def dump_spec(home: HomeSpec) -> dict[str, Any]:
-    """``home`` as a JSON-able scene spec (format `FORMAT`, version `VERSION`)."""
+    """``home`` as a JSON-able scene spec (format `FORMAT`, version `VERSION`).
+
+    Args:
+        home: the home.
+
+    Returns:
+        The spec.
+    """
     return {
         "format": FORMAT,
         "version": VERSION,
@@ -75,7 +82,17 @@ def dump_spec(home: HomeSpec) -> dict[str, Any]:
 
 
 def read_spec_file(path: str | Path) -> HomeSpec:
-    """The home in the scene spec file ``path``; unreadable JSON is a `SpecError` naming the file."""
+    """The home in the scene spec file ``path``; unreadable JSON is a `SpecError` naming the file.
+
+    Args:
+        path: the file.
+
+    Returns:
+        The home.
+
+    Raises:
+        SpecError: the file is unreadable, not JSON, or not a valid spec.
+    """
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as error:
@@ -86,7 +103,17 @@ def read_spec_file(path: str | Path) -> HomeSpec:
 
 
 def load_spec(data: Any) -> HomeSpec:
-    """The home a scene spec describes, after checking every field; `SpecError` lists the problems."""
+    """The home a scene spec describes, after checking every field; `SpecError` lists the problems.
+
+    Args:
+        data: the spec.
+
+    Returns:
+        The home.
+
+    Raises:
+        SpecError: listing every problem.
+    """
     reader = _Reader()
     home = reader.home(data)
     if reader.errors or home is None:

@@ -20,7 +20,12 @@ _EPS = 1e-6
 
 
 def check_home(home: HomeSpec, fail: Fail) -> None:
-    """What no single field shows: ids, overlaps, containment, and who stands in, on or under what."""
+    """What no single field shows: ids, overlaps, containment, and who stands in, on or under what.
+
+    Args:
+        home: the home read from a spec.
+        fail: called with (path, problem) for each problem.
+    """
     owners: dict[int, str] = {}
     for section, things in (("rooms", home.rooms), ("walls", home.walls), ("furniture", home.furniture),
                             ("objects", home.objects)):

@@ -14,7 +14,11 @@ from typing import Any
 
 
 class SpecError(ValueError):
-    """A scene spec that cannot be used. ``errors`` holds one 'path: problem' line per problem."""
+    """A scene spec that cannot be used. ``errors`` holds one 'path: problem' line per problem.
+
+    Args:
+        errors: the problems.
+    """
 
     def __init__(self, errors: list[str]) -> None:
         super().__init__("\n".join(errors))
@@ -33,10 +37,26 @@ class FieldChecker:
         self.errors: list[str] = []
 
     def fail(self, path: str, problem: str) -> None:
+        """Record a problem at the field ``path``.
+
+        Args:
+            path: the field's dotted path.
+            problem: what is wrong.
+        """
         self.errors.append(f"{path}: {problem}")
 
     def record(self, value: Any, path: str, required: Collection[str], optional: Collection[str] = ()) -> dict | None:
-        """A JSON object with exactly the ``required`` keys and perhaps some ``optional`` ones."""
+        """A JSON object with exactly the ``required`` keys and perhaps some ``optional`` ones.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            required: the keys it must have.
+            optional: the keys it may have.
+
+        Returns:
+            The object, or None (with the problems recorded).
+        """
         if not isinstance(value, dict):
             self.fail(path, f"expected an object, got {type(value).__name__}")
             return None
@@ -52,12 +72,31 @@ class FieldChecker:
         return value if ok else None
 
     def array(self, value: Any, path: str) -> list | None:
+        """A JSON list.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+
+        Returns:
+            The list, or None (with the problem recorded).
+        """
         if not isinstance(value, list):
             self.fail(path, f"expected a list, got {type(value).__name__}")
             return None
         return value
 
     def number(self, value: Any, path: str, positive: bool = False) -> float | None:
+        """A finite number (not a boolean), positive when asked.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            positive: whether it must be above zero.
+
+        Returns:
+            The number, or None (with the problem recorded).
+        """
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(path, f"expected a number, got {_show(value)}")
             return None
@@ -70,6 +109,16 @@ class FieldChecker:
         return float(value)
 
     def integer(self, value: Any, path: str, least: int) -> int | None:
+        """An integer (not a boolean) of at least ``least``.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            least: the smallest allowed.
+
+        Returns:
+            The integer, or None (with the problem recorded).
+        """
         if isinstance(value, bool) or not isinstance(value, int):
             self.fail(path, f"expected an integer, got {_show(value)}")
             return None
@@ -79,6 +128,16 @@ class FieldChecker:
         return value
 
     def word(self, value: Any, path: str, choices: Collection[str] | None = None) -> str | None:
+        """A non-empty string, one of ``choices`` when given.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            choices: the words allowed (any when None).
+
+        Returns:
+            The word, or None (with the problem recorded).
+        """
         if not isinstance(value, str) or not value:
             self.fail(path, f"expected a non-empty string, got {_show(value)}")
             return None
@@ -89,10 +148,30 @@ class FieldChecker:
         return value
 
     def optional_word(self, value: Any, path: str, choices: Collection[str] | None = None) -> str | None:
-        """A word or null; the caller tells a null apart from a bad value by the value itself."""
+        """A word or null; the caller tells a null apart from a bad value by the value itself.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            choices: the words allowed (any when None).
+
+        Returns:
+            The word, or None.
+        """
         return None if value is None else self.word(value, path, choices)
 
     def vector(self, value: Any, path: str, length: int, positive: bool = False) -> tuple[float, ...] | None:
+        """A list of ``length`` finite numbers, positive when asked.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            length: how many numbers.
+            positive: whether each must be above zero.
+
+        Returns:
+            The numbers, or None (with the problems recorded).
+        """
         items = self.array(value, path)
         if items is None:
             return None
@@ -103,7 +182,16 @@ class FieldChecker:
         return None if any(n is None for n in numbers) else tuple(numbers)  # type: ignore[arg-type]
 
     def words(self, value: Any, path: str, allowed: dict[str, Collection[str]] | None = None) -> dict[str, str] | None:
-        """A JSON object of string values; with ``allowed``, only those keys and values."""
+        """A JSON object of string values; with ``allowed``, only those keys and values.
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+            allowed: the values allowed per key (any key and value when None).
+
+        Returns:
+            The object, or None (with the problems recorded).
+        """
         if not isinstance(value, dict):
             self.fail(path, f"expected an object, got {type(value).__name__}")
             return None
@@ -117,7 +205,15 @@ class FieldChecker:
         return dict(value) if ok else None
 
     def scalars(self, value: Any, path: str) -> dict[str, Any] | None:
-        """A JSON object of strings, finite numbers and booleans (free-form attributes)."""
+        """A JSON object of strings, finite numbers and booleans (free-form attributes).
+
+        Args:
+            value: the value read.
+            path: its dotted path.
+
+        Returns:
+            The object, or None (with the problems recorded).
+        """
         if not isinstance(value, dict):
             self.fail(path, f"expected an object, got {type(value).__name__}")
             return None

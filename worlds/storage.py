@@ -53,17 +53,45 @@ class Box:
 
     @classmethod
     def between(cls, name: str, lo: tuple[float, ...] | np.ndarray, hi: tuple[float, ...] | np.ndarray) -> Box:
-        """The box between two opposite corners."""
+        """The box between two opposite corners.
+
+        Args:
+            name: the box's name.
+            lo: one corner.
+            hi: the opposite corner.
+
+        Returns:
+            The box.
+        """
         center = tuple(float(a + b) / 2 for a, b in zip(lo, hi))
         return cls(name, center, tuple(float(b - a) for a, b in zip(lo, hi)))  # type: ignore[arg-type]
 
     def lo(self) -> np.ndarray:
+        """The box's lowest corner.
+
+        Returns:
+            The corner (3,).
+        """
         return np.asarray(self.center) - np.asarray(self.size) / 2
 
     def hi(self) -> np.ndarray:
+        """The box's highest corner.
+
+        Returns:
+            The corner (3,).
+        """
         return np.asarray(self.center) + np.asarray(self.size) / 2
 
     def contains(self, other: Box, tol: float = 1e-9) -> bool:
+        """Whether ``other`` lies wholly inside this box, give or take ``tol``.
+
+        Args:
+            other: the other box.
+            tol: the tolerance (m).
+
+        Returns:
+            Whether it does.
+        """
         return bool(np.all(other.lo() >= self.lo() - tol) and np.all(other.hi() <= self.hi() + tol))
 
 
@@ -99,6 +127,11 @@ class Slot:
     size: Vec3
 
     def box(self) -> Box:
+        """The slot's space as a box of the same name.
+
+        Returns:
+            The box.
+        """
         return Box(self.name, self.center, self.size)
 
 
@@ -113,18 +146,45 @@ class StorageModel:
     panels: tuple[Box, ...]
 
     def part(self, name: str) -> Part:
+        """The part called ``name``.
+
+        Args:
+            name: the part's name.
+
+        Returns:
+            The part.
+
+        Raises:
+            KeyError: no such part, naming those there are.
+        """
         for part in self.parts:
             if part.name == name:
                 return part
         raise KeyError(f"{self.model}: no part {name!r}; parts are {[p.name for p in self.parts]}")
 
     def slot(self, name: str) -> Slot:
+        """The slot called ``name``.
+
+        Args:
+            name: the slot's name.
+
+        Returns:
+            The slot.
+
+        Raises:
+            KeyError: no such slot, naming those there are.
+        """
         for slot in self.slots:
             if slot.name == name:
                 return slot
         raise KeyError(f"{self.model}: no slot {name!r}; slots are {[s.name for s in self.slots]}")
 
     def to_dict(self) -> dict[str, Any]:
+        """The model as plain data, for scene specs.
+
+        Returns:
+            The dict.
+        """
         return {
             "model": self.model,
             "size": list(self.size),
@@ -135,6 +195,14 @@ class StorageModel:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> StorageModel:
+        """A model read back from its `to_dict` form.
+
+        Args:
+            data: the dict.
+
+        Returns:
+            The model.
+        """
         parts = tuple(
             Part(**{**p, "front": tuple(p["front"]), "tray": None if p["tray"] is None else _box(p["tray"])})
             for p in data["parts"]
@@ -156,7 +224,19 @@ def _part_dict(part: Part) -> dict[str, Any]:
 
 
 def storage_model(model: str, rng: np.random.Generator, size: Vec3 | None = None) -> StorageModel:
-    """A ``model`` piece with realistic proportions; ``size`` overrides the drawn outer size."""
+    """A ``model`` piece with realistic proportions; ``size`` overrides the drawn outer size.
+
+    Args:
+        model: the model's name (one of `MODELS`).
+        rng: the proportions' generator.
+        size: the outer size, or None to draw it.
+
+    Returns:
+        The model.
+
+    Raises:
+        ValueError: an unknown model.
+    """
     if model not in MODELS:
         raise ValueError(f"model: {model!r} is not one of {MODELS}")
     from worlds.storage_layout import LAYOUTS  # the layouts build the classes defined here
@@ -182,19 +262,40 @@ class StoragePlacement:
     contents: tuple[tuple[int, str], ...] = ()
 
     def part_ids(self) -> dict[str, int]:
-        """Link name (part or handle) -> instance id."""
+        """Link name (part or handle) -> instance id.
+
+        Returns:
+            The ids.
+        """
         ids: dict[str, int] = {}
         for k, part in enumerate(self.model.parts):
             ids[part.name], ids[part.handle] = self.first_part_id + 2 * k, self.first_part_id + 2 * k + 1
         return ids
 
     def state(self, part: str) -> float:
+        """A part's joint value in this placement (0, closed, when not given).
+
+        Args:
+            part: the part's name.
+
+        Returns:
+            The value (rad or m).
+        """
         return dict(self.states).get(part, 0.0)
 
     def slot_spot(self, slot: str, half_height: float, dx: float = 0.0, dy: float = 0.0) -> np.ndarray:
         """World centre of an object ``half_height`` tall standing in ``slot`` at (dx, dy) from its middle.
 
         A slot in a drawer is taken where the drawer stands in ``states``.
+
+        Args:
+            slot: the slot's name.
+            half_height: half the object's height.
+            dx: the offset across the slot.
+            dy: the offset into the slot.
+
+        Returns:
+            The centre (3,).
         """
         box = self.model.slot(slot)
         pulled = self.state(box.part) if box.part is not None else 0.0
@@ -202,20 +303,36 @@ class StoragePlacement:
         return self.to_world((cx + dx, cy + dy - pulled, cz - box.size[2] / 2 + half_height))
 
     def footprint(self) -> tuple[float, float, float, float]:
-        """(xmin, ymin, xmax, ymax) in the world around the closed piece and its handles."""
+        """(xmin, ymin, xmax, ymax) in the world around the closed piece and its handles.
+
+        Returns:
+            The footprint.
+        """
         w, d, _ = self.model.size
         corners = [self.to_world((sx * w / 2, y, 0.0)) for sx in (-1, 1) for y in (-d / 2 - HANDLE_REACH, d / 2)]
         xs, ys = [c[0] for c in corners], [c[1] for c in corners]
         return (min(xs), min(ys), max(xs), max(ys))
 
     def to_world(self, local: tuple[float, ...] | np.ndarray) -> np.ndarray:
-        """Points of the local frame, shape (3,) or (N, 3), in the world."""
+        """Points of the local frame, shape (3,) or (N, 3), in the world.
+
+        Args:
+            local: the points.
+
+        Returns:
+            The world points, shaped the same.
+        """
         x, y, z, yaw = self.pose
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
         return np.asarray(local, dtype=float) @ rotation.T + np.array([x, y, z])
 
     def to_dict(self) -> dict[str, Any]:
+        """The placement as plain data, for scene specs.
+
+        Returns:
+            The dict.
+        """
         return {
             "furniture_id": self.furniture_id,
             "model": self.model.to_dict(),
@@ -227,6 +344,14 @@ class StoragePlacement:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> StoragePlacement:
+        """A placement read back from its `to_dict` form.
+
+        Args:
+            data: the dict.
+
+        Returns:
+            The placement.
+        """
         return cls(
             int(data["furniture_id"]),
             StorageModel.from_dict(data["model"]),
@@ -238,7 +363,15 @@ class StoragePlacement:
 
 
 def part_labels(placement: StoragePlacement, colour: str) -> dict[str, dict[str, Any]]:
-    """Link name -> ground-truth label for every part ("door" or "drawer"; flaps are doors) and handle."""
+    """Link name -> ground-truth label for every part ("door" or "drawer"; flaps are doors) and handle.
+
+    Args:
+        placement: the placed piece.
+        colour: the piece's colour.
+
+    Returns:
+        The labels.
+    """
     ids = placement.part_ids()
     labels: dict[str, dict[str, Any]] = {}
     for part in placement.model.parts:
@@ -254,6 +387,12 @@ def home_storage(home: HomeSpec) -> list[StoragePlacement]:
 
     Ids are handed out in furniture order, two per part (the part, then its handle), starting right
     after the largest instance id in the home, so the same home always labels its parts the same.
+
+    Args:
+        home: the home.
+
+    Returns:
+        The placements, in furniture order.
     """
     things = (*home.rooms, *home.walls, *home.furniture, *home.objects)
     next_id = max((thing.instance_id for thing in things), default=0) + 1
@@ -274,7 +413,14 @@ def home_storage(home: HomeSpec) -> list[StoragePlacement]:
 
 
 def home_part_labels(home: HomeSpec) -> dict[int, dict[str, Any]]:
-    """Instance id -> label of every storage part and handle in ``home`` (the ids `home_storage` hands out)."""
+    """Instance id -> label of every storage part and handle in ``home`` (the ids `home_storage` hands out).
+
+    Args:
+        home: the home.
+
+    Returns:
+        The labels by id.
+    """
     colours = {piece.instance_id: piece.colour for piece in home.furniture}
     return {
         label["id"]: label
@@ -284,11 +430,25 @@ def home_part_labels(home: HomeSpec) -> dict[int, dict[str, Any]]:
 
 
 def handle_colour(colour: str) -> str:
-    """Handles are black, except on black furniture where they are white: they must stand out."""
+    """Handles are black, except on black furniture where they are white: they must stand out.
+
+    Args:
+        colour: the furniture's colour.
+
+    Returns:
+        The handles' colour.
+    """
     return "white" if colour == "black" else "black"
 
 
 def yaw_facing(theta: float) -> float:
-    """The yaw that turns a piece's front (local -y) towards the world direction ``theta``."""
+    """The yaw that turns a piece's front (local -y) towards the world direction ``theta``.
+
+    Args:
+        theta: the direction the front faces (rad).
+
+    Returns:
+        The yaw, in (-π, π].
+    """
     yaw = theta + math.pi / 2
     return math.atan2(math.sin(yaw), math.cos(yaw))

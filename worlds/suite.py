@@ -40,7 +40,20 @@ class SuitePart:
 
 
 def plan_split(n: int, split: list[int], seed_base: int, names: tuple[str, ...] = ("calib", "test")) -> list[SuitePart]:
-    """Consecutive seed ranges for each part; ``split`` must add up to ``n``."""
+    """Consecutive seed ranges for each part; ``split`` must add up to ``n``.
+
+    Args:
+        n: the entries in all.
+        split: each part's size.
+        seed_base: the first seed.
+        names: the parts' names (more are made up when there are more parts).
+
+    Returns:
+        The parts.
+
+    Raises:
+        SuiteError: n not positive, or sizes that are not positive or do not add up to n.
+    """
     if n <= 0:
         raise SuiteError(f"n: {n} must be positive")
     if sum(split) != n or any(k <= 0 for k in split):
@@ -55,13 +68,34 @@ def plan_split(n: int, split: list[int], seed_base: int, names: tuple[str, ...] 
 
 
 def spec_checksum(spec: dict[str, Any]) -> str:
-    """SHA-256 of the scene spec's canonical JSON."""
+    """SHA-256 of the scene spec's canonical JSON.
+
+    Args:
+        spec: the scene spec.
+
+    Returns:
+        The hex digest.
+    """
     return hashlib.sha256(json.dumps(spec, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
 def suite_line(seed: int, part: str, index: int, kinds: tuple[str, ...] | None = None,
                hidden: bool | None = None) -> dict[str, Any]:
-    """The suite entry for ``seed``: the scenario and the checksum of its home."""
+    """The suite entry for ``seed``: the scenario and the checksum of its home.
+
+    Args:
+        seed: the home's and the scenario's seed.
+        part: the suite part's name.
+        index: the entry's index within the part.
+        kinds: the question categories allowed (all when None).
+        hidden: hidden-evidence questions only, never, or either (None).
+
+    Returns:
+        The entry.
+
+    Raises:
+        SuiteError: the home has no such question.
+    """
     home = generate_home(seed)
     try:
         scenario = make_scenario(home, seed, kinds, hidden)
@@ -82,7 +116,21 @@ def suite_line(seed: int, part: str, index: int, kinds: tuple[str, ...] | None =
 def write_suite(out_dir: Path, parts: list[SuitePart],
                 progress: Callable[[str, int, int], None] | None = None,
                 kinds: tuple[str, ...] | None = None, hidden: bool | None = None) -> dict[str, Path]:
-    """Write each part to ``<out_dir>/<name>.jsonl``, appending and resuming; return the paths."""
+    """Write each part to ``<out_dir>/<name>.jsonl``, appending and resuming; return the paths.
+
+    Args:
+        out_dir: the suite's directory.
+        parts: the parts to write.
+        progress: called with (part, done, total) after each entry, if given.
+        kinds: the question categories allowed (all when None).
+        hidden: hidden-evidence questions only, never, or either (None).
+
+    Returns:
+        Each part's path by name.
+
+    Raises:
+        SuiteError: a seed's home has no such question.
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
     for part in parts:
@@ -109,7 +157,17 @@ def _kept_entries(path: Path) -> list[dict[str, Any]]:
 
 
 def read_suite(path: Path) -> list[dict[str, Any]]:
-    """Every entry of a suite file, checked; a torn last line (an interrupted write) is dropped."""
+    """Every entry of a suite file, checked; a torn last line (an interrupted write) is dropped.
+
+    Args:
+        path: the suite file.
+
+    Returns:
+        The entries.
+
+    Raises:
+        SuiteError: a line, other than a torn last one, that is not a valid entry.
+    """
     entries = []
     lines = Path(path).read_text(encoding="utf-8").splitlines()
     for number, line in enumerate(lines, start=1):
@@ -127,7 +185,18 @@ def read_suite(path: Path) -> list[dict[str, Any]]:
 
 def suite_entry(path: Path, entry_id: str) -> dict[str, Any]:
     """The entry of a suite file with id ``entry_id``; a SuiteError naming how many entries the
-    file holds, and the first few ids, when there is none."""
+    file holds, and the first few ids, when there is none.
+
+    Args:
+        path: the suite file.
+        entry_id: the entry's id.
+
+    Returns:
+        The entry.
+
+    Raises:
+        SuiteError: no entry has that id.
+    """
     entries = read_suite(path)
     for entry in entries:
         if entry["id"] == entry_id:

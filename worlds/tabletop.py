@@ -235,7 +235,18 @@ def _grow(rect: Rect) -> Rect:
 
 
 def tabletop_variant(task: str, seed: int) -> TabletopScene:
-    """Variant ``seed`` of ``task``; the same arguments always give the same scene."""
+    """Variant ``seed`` of ``task``; the same arguments always give the same scene.
+
+    Args:
+        task: the tabletop task (one of `TASKS`).
+        seed: the variant.
+
+    Returns:
+        The scene.
+
+    Raises:
+        ValueError: an unknown task.
+    """
     if task not in TASKS:
         raise ValueError(f"task: {task!r} is not one of {TASKS}")
     rng = np.random.default_rng([seed, TASKS.index(task)])
@@ -247,7 +258,15 @@ def tabletop_variant(task: str, seed: int) -> TabletopScene:
 
 
 def build_tabletop(client: int, scene: TabletopScene) -> SegLabels:
-    """Add ``scene`` to the (empty) simulation ``client``: table, articulated storage, static objects."""
+    """Add ``scene`` to the (empty) simulation ``client``: table, articulated storage, static objects.
+
+    Args:
+        client: the PyBullet client.
+        scene: the scene.
+
+    Returns:
+        The labels by body and link.
+    """
     labels = scene.labels()
     length, depth = scene.table_size
     leg = TABLE_HEIGHT - 0.04
@@ -277,6 +296,12 @@ def write_tabletop_suites(out_dir: Path | str) -> list[Path]:
     """One JSON-lines file per task, ``<task>.jsonl``: per line ``{seed, task, scene, acsg}`` for seeds 0-9.
 
     Each file is written to a temporary name and renamed, so a reader never sees half a suite.
+
+    Args:
+        out_dir: the suites' directory.
+
+    Returns:
+        The files written.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -25,7 +25,15 @@ SHELL_WALL = 0.006
 
 
 def half_extents(shape: str, dims: tuple[float, ...]) -> np.ndarray:
-    """Half sizes of the axis-aligned box around a ``shape`` of ``dims`` (see `vocabulary.OBJECTS`)."""
+    """Half sizes of the axis-aligned box around a ``shape`` of ``dims`` (see `vocabulary.OBJECTS`).
+
+    Args:
+        shape: "sphere", "cylinder" or "box".
+        dims: its dimensions.
+
+    Returns:
+        The half sizes (3,).
+    """
     if shape == "sphere":
         return np.array([dims[0]] * 3)
     if shape == "cylinder":
@@ -61,6 +69,11 @@ class TabletopObject:
         return half_extents(self.shape, self.dims)
 
     def footprint(self) -> Rect:
+        """The object's footprint on the table: (xmin, ymin, xmax, ymax).
+
+        Returns:
+            The rectangle.
+        """
         (x0, y0, _), (x1, y1, _) = self.center - self.half_extents, self.center + self.half_extents
         return (float(x0), float(y0), float(x1), float(y1))
 
@@ -77,7 +90,11 @@ class TabletopScene:
     objects: tuple[TabletopObject, ...]
 
     def labels(self) -> dict[int, Label]:
-        """Instance id -> label for the table, every piece, part, handle and object."""
+        """Instance id -> label for the table, every piece, part, handle and object.
+
+        Returns:
+            The labels.
+        """
         labels = {TABLE_ID: _label(TABLE_ID, "table", self.table_colour)}
         for colour, placement in self.storage:
             category = placement.model.model.replace("_", " ")
@@ -88,7 +105,11 @@ class TabletopScene:
         return labels
 
     def blockers(self) -> list[tuple[int, int, str]]:
-        """(object id, piece id, part name) for every object standing in a part's way."""
+        """(object id, piece id, part name) for every object standing in a part's way.
+
+        Returns:
+            The blockers.
+        """
         found = []
         standing = [o for o in self.objects if o.relation == "on"]
         for _, placement in self.storage:
@@ -112,6 +133,9 @@ class TabletopScene:
         is a DAG; object-action ("can be opened" / "can be picked"); action-object "reveals" (the
         objects the action makes visible, one level deep); action-action "precondition" (picking an
         obstacle away before opening the part it blocks). Pick actions exist for shells and obstacles.
+
+        Returns:
+            The graph's nodes and edges.
         """
         labels = self.labels()
         nodes: list[dict[str, Any]] = [
@@ -153,6 +177,11 @@ class TabletopScene:
         return {"task": self.task, "seed": self.seed, "nodes": nodes, "edges": edges}
 
     def to_dict(self) -> dict[str, Any]:
+        """The scene as plain data, for suites.
+
+        Returns:
+            The dict.
+        """
         return {
             "task": self.task,
             "seed": self.seed,
@@ -164,6 +193,14 @@ class TabletopScene:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TabletopScene:
+        """A scene read back from its `to_dict` form.
+
+        Args:
+            data: the dict.
+
+        Returns:
+            The scene.
+        """
         storage = tuple((s["colour"], StoragePlacement.from_dict(s["placement"])) for s in data["storage"])
         objects = tuple(
             TabletopObject(**{**o, "dims": tuple(o["dims"]), "center": tuple(o["center"])}) for o in data["objects"]

@@ -40,6 +40,11 @@ class Target:
     ids: frozenset[int]
 
     def to_dict(self) -> dict[str, Any]:
+        """The target as the episode report carries it.
+
+        Returns:
+            Its kind, things and ids.
+        """
         return {"kind": self.kind, "things": [dict(thing) for thing in self.things], "ids": sorted(self.ids)}
 
 
@@ -48,6 +53,16 @@ def question_target(home: HomeSpec, slots: Mapping[str, str | None]) -> Target:
 
     Raises ValueError naming the slots when they name nothing in this home, e.g. a scenario sent
     with another home than the one it was drawn for.
+
+    Args:
+        home: the home.
+        slots: the scenario's target slots.
+
+    Returns:
+        The target.
+
+    Raises:
+        ValueError: the slots name nothing in this home.
     """
     room = slots.get("room")
     if slots.get("container"):

@@ -24,7 +24,15 @@ WALL_COLOUR = "white"
 
 
 def rect_gap(a: Rect, b: Rect) -> float:
-    """Euclidean distance between two rectangles; 0 when they touch or overlap."""
+    """Euclidean distance between two rectangles; 0 when they touch or overlap.
+
+    Args:
+        a: one rectangle.
+        b: the other.
+
+    Returns:
+        The distance.
+    """
     dx = max(a[0] - b[2], b[0] - a[2], 0.0)
     dy = max(a[1] - b[3], b[1] - a[3], 0.0)
     return math.hypot(dx, dy)
@@ -35,21 +43,56 @@ OVERLAP_TOLERANCE = 1e-9
 
 
 def rects_overlap(a: Rect, b: Rect) -> bool:
-    """Whether two rectangles share interior area (touching edges do not count)."""
+    """Whether two rectangles share interior area (touching edges do not count).
+
+    Args:
+        a: one rectangle.
+        b: the other.
+
+    Returns:
+        Whether they overlap.
+    """
     tol = OVERLAP_TOLERANCE
     return a[0] < b[2] - tol and b[0] < a[2] - tol and a[1] < b[3] - tol and b[1] < a[3] - tol
 
 
 def point_rect_distance(x: float, y: float, rect: Rect) -> float:
-    """Distance from a point to a rectangle; 0 inside it."""
+    """Distance from a point to a rectangle; 0 inside it.
+
+    Args:
+        x: the point's x.
+        y: the point's y.
+        rect: the rectangle.
+
+    Returns:
+        The distance.
+    """
     return rect_gap((x, y, x, y), rect)
 
 
 def shrink(rect: Rect, margin: float) -> Rect:
+    """A rectangle moved in by ``margin`` on every side.
+
+    Args:
+        rect: the rectangle.
+        margin: how far in (negative: out).
+
+    Returns:
+        The rectangle.
+    """
     return (rect[0] + margin, rect[1] + margin, rect[2] - margin, rect[3] - margin)
 
 
 def box_footprint(center: tuple[float, ...], size: tuple[float, ...]) -> Rect:
+    """The floor rectangle of a box of ``size`` centred at ``center``.
+
+    Args:
+        center: the box's centre.
+        size: its size.
+
+    Returns:
+        The rectangle.
+    """
     return (center[0] - size[0] / 2, center[1] - size[1] / 2, center[0] + size[0] / 2, center[1] + size[1] / 2)
 
 
@@ -82,9 +125,23 @@ class Room:
         return [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
 
     def contains(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies in the room, its edges included.
+
+        Args:
+            x: the point's x.
+            y: the point's y.
+
+        Returns:
+            Whether it does.
+        """
         return self.rect[0] <= x <= self.rect[2] and self.rect[1] <= y <= self.rect[3]
 
     def label(self) -> Label:
+        """The room's floor label.
+
+        Returns:
+            The label.
+        """
         return _label(self.instance_id, "floor", self.floor_colour)
 
 
@@ -98,7 +155,15 @@ class Doorway:
     along: str
 
     def clear_zone(self, depth: float, side_margin: float = 0.1) -> Rect:
-        """The rectangle that must stay empty on both sides of the doorway, so the robot can pass."""
+        """The rectangle that must stay empty on both sides of the doorway, so the robot can pass.
+
+        Args:
+            depth: how far it reaches on each side.
+            side_margin: how far past the jambs.
+
+        Returns:
+            The rectangle.
+        """
         half = self.width / 2 + side_margin
         cx, cy = self.center
         if self.along == "x":
@@ -119,6 +184,11 @@ class Wall:
         return box_footprint(self.center, self.size)
 
     def label(self) -> Label:
+        """The wall's label.
+
+        Returns:
+            The label.
+        """
         return _label(self.instance_id, "wall", WALL_COLOUR)
 
 
@@ -154,6 +224,11 @@ class Furniture:
         return self.center[2] + self.size[2] / 2
 
     def label(self) -> Label:
+        """The piece's label: its id, category and colour.
+
+        Returns:
+            The label.
+        """
         return _label(self.instance_id, self.category, self.colour)
 
 
@@ -202,11 +277,23 @@ class Item:
         return (self.center[0] - hx, self.center[1] - hy, self.center[0] + hx, self.center[1] + hy)
 
     def label(self) -> Label:
+        """The object's label: its id, category and colour.
+
+        Returns:
+            The label.
+        """
         return _label(self.instance_id, self.category, self.colour)
 
 
 def half_extents(category: str) -> tuple[float, float, float]:
-    """Half sizes of the axis-aligned box around an object of ``category``."""
+    """Half sizes of the axis-aligned box around an object of ``category``.
+
+    Args:
+        category: the object's category.
+
+    Returns:
+        The half sizes.
+    """
     shape, dims = OBJECTS[category]
     if shape == "box":
         return (dims[0] / 2, dims[1] / 2, dims[2] / 2)

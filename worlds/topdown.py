@@ -53,7 +53,15 @@ def _rect(ax: Axes, rect: Rect, **style: object) -> None:
 
 
 def draw_home(home: HomeSpec, path: str | Path) -> Path:
-    """Write the picture of ``home`` to ``path`` (PNG) and return the path."""
+    """Write the picture of ``home`` to ``path`` (PNG) and return the path.
+
+    Args:
+        home: the home.
+        path: the PNG file.
+
+    Returns:
+        The path.
+    """
     x0, y0, x1, y1 = home.bounds
     fig = Figure(figsize=((x1 - x0 + 1.6) * SCALE_IN_PER_M, (y1 - y0 + 2.6) * SCALE_IN_PER_M))
     ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))

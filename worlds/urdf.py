@@ -23,7 +23,15 @@ _GRAVITY = 9.81
 
 
 def joint_frame(model: StorageModel, part: Part) -> tuple[Vec3, Vec3]:
-    """(origin, axis) of the part's joint in the local frame: opening is positive about/along the axis."""
+    """(origin, axis) of the part's joint in the local frame: opening is positive about/along the axis.
+
+    Args:
+        model: the storage model.
+        part: the part.
+
+    Returns:
+        The origin and axis.
+    """
     x0, z0, x1, z1 = part.front
     y = -model.size[1] / 2
     if part.kind == "drawer":
@@ -36,7 +44,15 @@ def joint_frame(model: StorageModel, part: Part) -> tuple[Vec3, Vec3]:
 
 
 def part_boxes(model: StorageModel, part: Part) -> list[Box]:
-    """The part's boards in the local frame, closed: its front, and a drawer's tray walls."""
+    """The part's boards in the local frame, closed: its front, and a drawer's tray walls.
+
+    Args:
+        model: the storage model.
+        part: the part.
+
+    Returns:
+        The boxes.
+    """
     x0, z0, x1, z1 = part.front
     y = -model.size[1] / 2
     boxes = [Box.between("front", (x0, y, z0), (x1, y + FRONT, z1))]
@@ -56,6 +72,13 @@ def handle_boxes(model: StorageModel, part: Part) -> list[Box]:
 
     Doors get a vertical bar near their free edge, drawers a horizontal one across their middle,
     flaps a horizontal one near their top edge.
+
+    Args:
+        model: the storage model.
+        part: the part.
+
+    Returns:
+        The bar, then the posts.
     """
     x0, z0, x1, z1 = part.front
     width, height = x1 - x0, z1 - z0
@@ -85,7 +108,16 @@ def handle_boxes(model: StorageModel, part: Part) -> list[Box]:
 
 
 def part_transform(model: StorageModel, part: Part, q: float) -> np.ndarray:
-    """4x4 taking a point of the closed part (local frame) to where it is at joint value ``q``."""
+    """4x4 taking a point of the closed part (local frame) to where it is at joint value ``q``.
+
+    Args:
+        model: the storage model.
+        part: the part.
+        q: the joint value (rad or m).
+
+    Returns:
+        The transform.
+    """
     origin, axis = (np.asarray(v) for v in joint_frame(model, part))
     moved = np.eye(4)
     if part.joint == "prismatic":
@@ -103,6 +135,15 @@ def sweep_points(model: StorageModel, part: Part, spacing: float = 0.025, steps:
 
     A grid at most ``spacing`` apart over every board of the part and its handle, at ``steps`` + 1
     joint values: whatever holds one of these points stands in the part's way.
+
+    Args:
+        model: the storage model.
+        part: the part.
+        spacing: the grid's spacing (m).
+        steps: the joint steps from closed to open.
+
+    Returns:
+        The points.
     """
     grids = []
     for box in (*part_boxes(model, part), *handle_boxes(model, part)):
@@ -114,7 +155,15 @@ def sweep_points(model: StorageModel, part: Part, spacing: float = 0.025, steps:
 
 
 def friction(model: StorageModel, part: Part) -> float:
-    """Joint friction (N·m or N): holds a flap against gravity, and lets any part rest where it is left."""
+    """Joint friction (N·m or N): holds a flap against gravity, and lets any part rest where it is left.
+
+    Args:
+        model: the storage model.
+        part: the part.
+
+    Returns:
+        The friction.
+    """
     if part.kind == "drawer":
         return 4.0
     if part.kind == "door":
@@ -127,7 +176,16 @@ def friction(model: StorageModel, part: Part) -> float:
 
 
 def storage_urdf(model: StorageModel, rgba: tuple[float, ...], handle_rgba: tuple[float, ...] = HANDLE_RGBA) -> str:
-    """The piece as URDF text: a fixed-base tree carcass -> part -> handle."""
+    """The piece as URDF text: a fixed-base tree carcass -> part -> handle.
+
+    Args:
+        model: the storage model.
+        rgba: the carcass's and parts' colour.
+        handle_rgba: the handles' colour.
+
+    Returns:
+        The URDF.
+    """
     links = [_link("carcass", model.panels, (0.0, 0.0, 0.0), rgba, max(_mass(model.panels), 1.0))]
     joints = []
     for part in model.parts:

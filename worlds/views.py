@@ -50,7 +50,15 @@ class View:
 def relevant(label: Label, scenario: Scenario) -> bool:
     """Whether an instance is of the kind the question asks about: the storage piece it names,
     else the thing or appliance, with the colour it names (any thing of that colour when it names
-    no kind)."""
+    no kind).
+
+    Args:
+        label: the instance's label.
+        scenario: the scenario.
+
+    Returns:
+        Whether it is relevant.
+    """
     t = scenario.target
     kind = t["container"] or t["category"] or t["appliance"]
     if label["category"] not in OBJECTS and label["category"] not in FURNITURE:
@@ -62,7 +70,19 @@ def aimed_views(world: World, scenario: Scenario, target: Target, count: int, rn
                 tries: int = 24) -> list[View]:
     """Up to ``count`` views from where the answer shows, ``tries`` spots at most: facing the
     centre of the target things from free spots `_NEAR_M`–`_FAR_M` from it, every thing in the
-    frame (for a room, its floor)."""
+    frame (for a room, its floor).
+
+    Args:
+        world: the world, reset to the home.
+        scenario: the scenario.
+        target: its target.
+        count: the views wanted.
+        rng: the spots' generator.
+        tries: spots tried at most.
+
+    Returns:
+        The views.
+    """
     assert world.home is not None
     cx, cy = np.mean([thing["xy"] for thing in target.things], axis=0)
     views: list[View] = []
@@ -81,7 +101,19 @@ def aimed_views(world: World, scenario: Scenario, target: Target, count: int, rn
 
 def random_views(world: World, scenario: Scenario, target: Target, count: int,
                  rng: np.random.Generator, tries: int = 200) -> list[View]:
-    """``count`` views from free spots drawn anywhere in the home, facing anywhere."""
+    """``count`` views from free spots drawn anywhere in the home, facing anywhere.
+
+    Args:
+        world: the world, reset to the home.
+        scenario: the scenario.
+        target: its target.
+        count: the views wanted.
+        rng: the spots' generator.
+        tries: spots tried at most.
+
+    Returns:
+        The views.
+    """
     assert world.home is not None
     x0, y0, x1, y1 = world.home.bounds
     views: list[View] = []

@@ -32,17 +32,36 @@ _ORDINALS = ("", "second ", "third ")
 
 
 def room_name(kind: str, index: int) -> str:
-    """The name of the ``index``-th room (0-based) of ``kind``: 'bedroom', 'second bedroom', ..."""
+    """The name of the ``index``-th room (0-based) of ``kind``: 'bedroom', 'second bedroom', ...
+
+    Args:
+        kind: the room's kind.
+        index: which of that kind.
+
+    Returns:
+        The name.
+    """
     return _ORDINALS[index] + kind
 
 
 def room_names() -> tuple[str, ...]:
-    """Every name a room can carry, so questions can name any room of any home."""
+    """Every name a room can carry, so questions can name any room of any home.
+
+    Returns:
+        The names.
+    """
     return tuple(room_name(kind, i) for kind in ROOM_TYPES for i in range(ROOM_REPEATS.get(kind, 1)))
 
 
 def room_kind(name: str) -> str:
-    """The kind of the room called ``name`` ('second bedroom' -> 'bedroom')."""
+    """The kind of the room called ``name`` ('second bedroom' -> 'bedroom').
+
+    Args:
+        name: the room's name.
+
+    Returns:
+        The kind.
+    """
     for ordinal in _ORDINALS[1:]:
         if name.startswith(ordinal):
             return name[len(ordinal):]

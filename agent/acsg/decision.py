@@ -48,7 +48,16 @@ def _owner(context: DecisionContext, node_id: str) -> str:
 def surrounding_objects(action: ActionNode, context: DecisionContext, radius_m: float | None = None) -> list[Detection]:
     """The objects the verifier should consider for ``action``, as in the reference code: in view,
     standing on a root (the table), not the piece being opened nor its own parts, not moved away,
-    and (with ``radius_m`` and known centroids) within that distance of the handle or part."""
+    and (with ``radius_m`` and known centroids) within that distance of the handle or part.
+
+    Args:
+        action: the action judged (its target, and its handle when it has one).
+        context: the graph and what is in view.
+        radius_m: how near the handle or part an object must be (any distance when None).
+
+    Returns:
+        The objects' detections.
+    """
     graph = context.graph
     owner = _owner(context, action.target)
     anchor_id = action.params.get("handle", action.target)
@@ -88,6 +97,15 @@ class RuleDecisionModule:
     vessel_labels: Collection[str] = VESSEL_LABELS
 
     def propose(self, obj: ObjectNode, context: DecisionContext) -> Proposal:
+        """Open storage and what has parts, pick up covers and upturned vessels, leave the rest.
+
+        Args:
+            obj: the object judged.
+            context: the graph and what is in view.
+
+        Returns:
+            "open", "pick" or "none".
+        """
         label = obj.label.lower()
         if label in self.storage_labels or self._has_parts(obj, context):
             return "open"
@@ -105,6 +123,15 @@ class RuleDecisionModule:
         return False
 
     def verify(self, action: ActionNode, context: DecisionContext) -> list[str]:
+        """The objects in view standing in what opening the part sweeps; nothing blocks other actions.
+
+        Args:
+            action: the action judged.
+            context: the graph and what is in view.
+
+        Returns:
+            The blockers' node ids.
+        """
         if action.type != "open":
             return []
         target = context.graph.object(action.target)
@@ -166,14 +193,31 @@ SKILLS: dict[str, Proposal] = {"1": "open", "2": "pick", "3": "none"}
 
 
 def proposer_prompt(obj: ObjectNode, surrounding: list[str]) -> str:
-    """The proposer's question about ``obj``; the answer is one skill number."""
+    """The proposer's question about ``obj``; the answer is one skill number.
+
+    Args:
+        obj: the object asked about.
+        surrounding: the labels of the other objects in view.
+
+    Returns:
+        The prompt.
+    """
     around = ", ".join(surrounding) if surrounding else "none"
     return (f"{PROPOSER_SYSTEM}\n\n{PROPOSER_USER}\n\nQuery object: {obj.describe()}. Surrounding objects: "
             f"[{around}]. Answer with the number of the skill only: 1, 2 or 3.")
 
 
 def verifier_prompt(part: ObjectNode, candidate: str, surrounding: list[str]) -> str:
-    """The verifier's question whether ``candidate`` blocks opening ``part``; the answer is Yes or No."""
+    """The verifier's question whether ``candidate`` blocks opening ``part``; the answer is Yes or No.
+
+    Args:
+        part: the part to open.
+        candidate: the label of the object that may block it.
+        surrounding: the labels of the objects around it.
+
+    Returns:
+        The prompt.
+    """
     return (f"{VERIFIER_SYSTEM}\n\n{VERIFIER_USER}\n\nQuery: the process of open {part.describe()}. Given object "
             f"list [{', '.join(surrounding)}]. Could the {candidate} block the {part.label} from opening? "
             f"Answer with Yes or No.")
@@ -206,11 +250,29 @@ class PromptDecisionModule:
         return probs
 
     def propose(self, obj: ObjectNode, context: DecisionContext) -> Proposal:
+        """Ask the VLM the proposer's question and take its likeliest skill.
+
+        Args:
+            obj: the object judged.
+            context: the graph and what is in view.
+
+        Returns:
+            "open", "pick" or "none".
+        """
         around = [d.label for d in context.visible.values() if d.id != obj.id]
         probs = self._ask(proposer_prompt(obj, around), tuple(SKILLS))
         return SKILLS[max(SKILLS, key=lambda k: probs[k])]
 
     def verify(self, action: ActionNode, context: DecisionContext) -> list[str]:
+        """Ask the VLM the verifier's question about each object around the part to open.
+
+        Args:
+            action: the action judged.
+            context: the graph and what is in view.
+
+        Returns:
+            The node ids of the objects it says block; empty for actions other than open.
+        """
         if action.type != "open":
             return []
         part = context.graph.object(action.target)

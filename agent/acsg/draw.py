@@ -24,7 +24,14 @@ _ACTION_STYLE = {"boxstyle": "square,pad=0.35", "facecolor": "#fde2c8", "edgecol
 
 
 def layout(graph: ACSG) -> dict[str, tuple[float, float]]:
-    """Node id -> (x, y): y is minus the depth, x the rank within the layer, centred."""
+    """Node id -> (x, y): y is minus the depth, x the rank within the layer, centred.
+
+    Args:
+        graph: the graph.
+
+    Returns:
+        The positions.
+    """
     depth = depths(graph)
     layers: dict[int, list[str]] = {}
     for node in topological_order(graph):
@@ -51,7 +58,17 @@ def _text(graph: ACSG, node_id: str) -> str:
 
 
 def draw_acsg(graph: ACSG, path: Path | str, title: str | None = None, dpi: int = 120) -> Path:
-    """Write the graph to a PNG at ``path`` and return the path."""
+    """Write the graph to a PNG at ``path`` and return the path.
+
+    Args:
+        graph: the graph.
+        path: the PNG to write.
+        title: the figure's title, if any.
+        dpi: the image's resolution.
+
+    Returns:
+        The path written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -42,6 +42,15 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
 
     ``toward`` is where the robot looks from (the camera position), which orients front normals.
     ``vacated``: instance id -> the (lo, hi) box it filled before it was moved away.
+
+    Args:
+        memory: the remembered instances.
+        toward: where the robot looks from.
+        drawer_pull_m: how far a drawer's swept box reaches out.
+        vacated: the boxes of things moved away.
+
+    Returns:
+        The detections.
     """
     live = memory.live()
     by_id = {inst.id: inst for inst in live}

@@ -172,15 +172,27 @@ class ACSG:
         return len(self._nodes)
 
     def nodes(self) -> list[Node]:
-        """Every node, in insertion order."""
+        """Every node, in insertion order.
+
+        Returns:
+            The nodes.
+        """
         return list(self._nodes.values())
 
     def objects(self) -> list[ObjectNode]:
-        """The object nodes, in insertion order."""
+        """The object nodes, in insertion order.
+
+        Returns:
+            The object nodes.
+        """
         return [n for n in self._nodes.values() if isinstance(n, ObjectNode)]
 
     def actions(self) -> list[ActionNode]:
-        """The action nodes, in insertion order."""
+        """The action nodes, in insertion order.
+
+        Returns:
+            The action nodes.
+        """
         return [n for n in self._nodes.values() if isinstance(n, ActionNode)]
 
     # ---- edges ------------------------------------------------------------------------------
@@ -246,7 +258,15 @@ class ACSG:
         return [e for out in self._out.values() for e in out.values() if kind is None or e.kind == kind]
 
     def edge(self, source: str, target: str) -> Edge | None:
-        """The edge ``source`` -> ``target``, or None when there is none."""
+        """The edge ``source`` -> ``target``, or None when there is none.
+
+        Args:
+            source: the edge's source node id.
+            target: its target node id.
+
+        Returns:
+            The edge, or None.
+        """
         return self._out.get(source, {}).get(target)
 
     def successors(self, node_id: str, kind: str | None = None) -> list[str]:

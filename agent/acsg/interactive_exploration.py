@@ -80,6 +80,11 @@ class LogEntry:
     reward: float = 0.0
 
     def describe(self) -> str:
+        """One line for the log: the primitive, what it acted on, what it revealed, or why it failed.
+
+        Returns:
+            The line.
+        """
         text = f"{self.primitive} {self.label} ({self.target})"
         if self.revealed:
             text += f" -> reveals {', '.join(self.revealed)}"
@@ -96,7 +101,11 @@ class ExplorationResult:
     notes: tuple[str, ...] = ()
 
     def steps(self) -> list[str]:
-        """The executed primitives as ``"<primitive> <node id>"``, failures included, in order."""
+        """The executed primitives as ``"<primitive> <node id>"``, failures included, in order.
+
+        Returns:
+            The steps.
+        """
         return [f"{e.primitive} {e.target}" for e in self.log]
 
     @property
@@ -135,6 +144,11 @@ class Explorer:
 
     # ---- the loop ----------------------------------------------------------------------------
     def run(self) -> ExplorationResult:
+        """Perceive, then explore objects and run the stacked actions until nothing is left (or the step budget runs out).
+
+        Returns:
+            The explored graph and the log.
+        """
         self._perceive(revealed_by=None)
         truncated = False
         while True:
@@ -160,6 +174,11 @@ class Explorer:
         )
 
     def context(self) -> DecisionContext:
+        """What the decision module judges from now: the graph, what is in view, what was moved away.
+
+        Returns:
+            The context.
+        """
         return DecisionContext(self.graph, dict(self.visible), frozenset(self.moved_away))
 
     # ---- memory: nodes and spatial relations (Algorithm 2) ------------------------------------
@@ -328,5 +347,15 @@ class Explorer:
 
 def explore(perception: Perception, decision: DecisionModule, executor: SkillExecutor,
             config: InteractiveExploreConfig | None = None) -> ExplorationResult:
-    """Explore until nothing is left to judge or do; see the module docstring for the order."""
+    """Explore until nothing is left to judge or do; see the module docstring for the order.
+
+    Args:
+        perception: what detects the objects in view.
+        decision: the proposer and verifier.
+        executor: what runs the primitives.
+        config: the step budget and other settings (defaults when None).
+
+    Returns:
+        The explored graph and the log.
+    """
     return Explorer(perception, decision, executor, config or InteractiveExploreConfig()).run()

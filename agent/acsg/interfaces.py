@@ -21,7 +21,14 @@ PROPOSALS: tuple[str, ...] = ("open", "pick", "none")
 
 
 def object_id(instance: str | int) -> str:
-    """The node id of a perceived instance: the ground truth's ``o<instance>``."""
+    """The node id of a perceived instance: the ground truth's ``o<instance>``.
+
+    Args:
+        instance: the perceived instance.
+
+    Returns:
+        The node id.
+    """
     return f"o{instance}"
 
 
@@ -89,21 +96,48 @@ class DecisionContext:
 
 class Perception(Protocol):
     def observe(self) -> list[Detection]:
-        """Everything detected in the current views (called after every action)."""
+        """Everything detected in the current views (called after every action).
+
+        Returns:
+            The detections.
+        """
         ...
 
 
 class DecisionModule(Protocol):
     def propose(self, obj: ObjectNode, context: DecisionContext) -> Proposal:
-        """The proposer: how to explore ``obj``: "open" its doors or drawers, "pick" it up, or "none"."""
+        """The proposer: how to explore ``obj``: "open" its doors or drawers, "pick" it up, or "none".
+
+        Args:
+            obj: the object judged.
+            context: the graph and what is in view.
+
+        Returns:
+            "open", "pick" or "none".
+        """
         ...
 
     def verify(self, action: ActionNode, context: DecisionContext) -> list[str]:
-        """The verifier: node ids of the objects that block ``action`` now (empty when it can run)."""
+        """The verifier: node ids of the objects that block ``action`` now (empty when it can run).
+
+        Args:
+            action: the action judged.
+            context: the graph and what is in view.
+
+        Returns:
+            The blockers' node ids.
+        """
         ...
 
 
 class SkillExecutor(Protocol):
     def execute(self, call: SkillCall) -> SkillResult:
-        """Run one primitive; a failure says why."""
+        """Run one primitive; a failure says why.
+
+        Args:
+            call: the primitive and what it acts on.
+
+        Returns:
+            How it went.
+        """
         ...

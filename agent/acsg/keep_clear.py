@@ -29,7 +29,16 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray) ->
     open (a door is closed again from where it stands open): from the handle straight out of the
     front towards the robot at ``robot_xy``, `LANE_HALF_WIDTH_M` to either side. ``eye``: where the
     parts were seen from (it orients their fronts). A part whose geometry cannot be read is left
-    out."""
+    out.
+
+    Args:
+        memory: the remembered instances.
+        eye: where the parts were seen from.
+        robot_xy: where the robot stands.
+
+    Returns:
+        The point sets.
+    """
     kept = []
     for handle in memory.with_label("handle"):
         if handle.parent is None:

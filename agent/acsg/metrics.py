@@ -34,12 +34,26 @@ from agent.acsg.nodes import ActionNode, ObjectNode
 
 
 def node_label(node: ObjectNode | ActionNode) -> str:
-    """What a node is compared by: an object's label, an action's type."""
+    """What a node is compared by: an object's label, an action's type.
+
+    Args:
+        node: the node.
+
+    Returns:
+        The label or type.
+    """
     return node.type if isinstance(node, ActionNode) else node.label
 
 
 def to_networkx(graph: ACSG) -> Any:
-    """The graph as an ``nx.DiGraph`` with ``kind`` and ``label`` on nodes, ``kind`` and ``relation`` on edges."""
+    """The graph as an ``nx.DiGraph`` with ``kind`` and ``label`` on nodes, ``kind`` and ``relation`` on edges.
+
+    Args:
+        graph: the graph.
+
+    Returns:
+        The ``nx.DiGraph``.
+    """
     import networkx as nx
 
     out = nx.DiGraph()
@@ -59,7 +73,15 @@ def _edge_match(a: Mapping[str, Any], b: Mapping[str, Any]) -> bool:
 
 
 def aligned_edit_distance(a: ACSG, b: ACSG) -> int:
-    """Edit cost when node ids are taken as the matching: an upper bound on the true distance."""
+    """Edit cost when node ids are taken as the matching: an upper bound on the true distance.
+
+    Args:
+        a: one graph.
+        b: the other.
+
+    Returns:
+        The cost.
+    """
     cost = 0
     ids_a, ids_b = {n.id: n for n in a.nodes()}, {n.id: n for n in b.nodes()}
     for node_id in ids_a.keys() | ids_b.keys():
@@ -86,7 +108,16 @@ class EditDistance:
 
 
 def edit_distance(explored: ACSG, truth: ACSG, timeout_s: float = 10.0) -> EditDistance:
-    """The graph edit distance, bounded by the id-aligned cost; see the module docstring."""
+    """The graph edit distance, bounded by the id-aligned cost; see the module docstring.
+
+    Args:
+        explored: the explored graph.
+        truth: the ground truth.
+        timeout_s: how long the exact search may take.
+
+    Returns:
+        The distance, and whether it is exact.
+    """
     bound = aligned_edit_distance(explored, truth)
     if bound == 0:
         return EditDistance(0.0, True)
@@ -101,11 +132,29 @@ def edit_distance(explored: ACSG, truth: ACSG, timeout_s: float = 10.0) -> EditD
 
 
 def graph_edit_distance(explored: ACSG, truth: ACSG, timeout_s: float = 10.0) -> float:
+    """The value of `edit_distance`.
+
+    Args:
+        explored: the explored graph.
+        truth: the ground truth.
+        timeout_s: how long the exact search may take.
+
+    Returns:
+        The distance.
+    """
     return edit_distance(explored, truth, timeout_s).value
 
 
 def is_success(explored: ACSG, truth: ACSG) -> bool:
-    """Whether the graphs are the same up to node ids: an isomorphism keeping labels and relations."""
+    """Whether the graphs are the same up to node ids: an isomorphism keeping labels and relations.
+
+    Args:
+        explored: the explored graph.
+        truth: the ground truth.
+
+    Returns:
+        Whether they are.
+    """
     if aligned_edit_distance(explored, truth) == 0:
         return True
     import networkx as nx
@@ -115,7 +164,14 @@ def is_success(explored: ACSG, truth: ACSG) -> bool:
 
 
 def hidden_objects(graph: ACSG) -> list[str]:
-    """Objects some action reveals: what cannot be seen without acting."""
+    """Objects some action reveals: what cannot be seen without acting.
+
+    Args:
+        graph: the graph.
+
+    Returns:
+        Their node ids.
+    """
     return [n.id for n in graph.objects() if graph.predecessors(n.id, "action-object")]
 
 
@@ -124,6 +180,14 @@ def object_recovery(explored: ACSG, truth: ACSG, by: str = "label") -> float:
 
     ``by="label"`` counts matching labels among the objects the exploration found by acting (the
     ids of a real perception are its own); ``by="id"`` asks for the same node id and label.
+
+    Args:
+        explored: the explored graph.
+        truth: the ground truth.
+        by: "label" or "id".
+
+    Returns:
+        The share.
     """
     hidden = [truth.object(n) for n in hidden_objects(truth)]
     if not hidden:
@@ -141,7 +205,16 @@ def object_recovery(explored: ACSG, truth: ACSG, by: str = "label") -> float:
 
 def position_recovery(start: Mapping[str, Any], final: Mapping[str, Any], tolerance_m: float = 0.01) -> float:
     """Share of things (keys of ``start``) whose final position is within ``tolerance_m`` of the start;
-    a thing missing from ``final`` is not recovered. 1.0 for no things."""
+    a thing missing from ``final`` is not recovered. 1.0 for no things.
+
+    Args:
+        start: each thing's start position.
+        final: each thing's final position.
+        tolerance_m: how far from the start counts as back.
+
+    Returns:
+        The share.
+    """
     if not start:
         return 1.0
     back = 0
@@ -152,7 +225,16 @@ def position_recovery(start: Mapping[str, Any], final: Mapping[str, Any], tolera
 
 
 def state_recovery(start: Mapping[str, float], final: Mapping[str, float], tolerance: float = 1e-3) -> float:
-    """Share of articulated parts (keys of ``start``: joint values or 0/1 states) back in their start state."""
+    """Share of articulated parts (keys of ``start``: joint values or 0/1 states) back in their start state.
+
+    Args:
+        start: each part's start state.
+        final: each part's final state.
+        tolerance: how far from the start counts as back.
+
+    Returns:
+        The share.
+    """
     if not start:
         return 1.0
     back = sum(1 for key, value in start.items() if key in final and abs(final[key] - value) <= tolerance)
@@ -162,20 +244,47 @@ def state_recovery(start: Mapping[str, float], final: Mapping[str, float], toler
 def scene_restored(start_positions: Mapping[str, Any], final_positions: Mapping[str, Any],
                    start_states: Mapping[str, float], final_states: Mapping[str, float],
                    tolerance_m: float = 0.01, tolerance: float = 1e-3) -> bool:
-    """The paper's binary State Recovery: every thing back in place and every part in its state."""
+    """The paper's binary State Recovery: every thing back in place and every part in its state.
+
+    Args:
+        start_positions: each thing's start position.
+        final_positions: each thing's final position.
+        start_states: each part's start state.
+        final_states: each part's final state.
+        tolerance_m: how far from its start a thing may be.
+        tolerance: how far from its start a part's state may be.
+
+    Returns:
+        Whether the scene is restored.
+    """
     return (position_recovery(start_positions, final_positions, tolerance_m) == 1.0
             and state_recovery(start_states, final_states, tolerance) == 1.0)
 
 
 def need_to_explore(truth: ACSG) -> list[str]:
-    """Action ids of the ground truth's need-to-explore space: every open, every revealing pick."""
+    """Action ids of the ground truth's need-to-explore space: every open, every revealing pick.
+
+    Args:
+        truth: the ground truth.
+
+    Returns:
+        The action ids.
+    """
     return [a.id for a in truth.actions()
             if a.type == "open" or (a.type == "pick" and truth.successors(a.id, "action-object"))]
 
 
 def unexplored_space(truth: ACSG, explored: ACSG | Iterable[str]) -> float:
     """Share of the need-to-explore space never explored. ``explored`` is the explored graph (its
-    actions in state "explored" count) or the ids of the actions carried out."""
+    actions in state "explored" count) or the ids of the actions carried out.
+
+    Args:
+        truth: the ground truth.
+        explored: the explored graph, or the ids of the actions carried out.
+
+    Returns:
+        The share.
+    """
     needed = need_to_explore(truth)
     if not needed:
         return 0.0
@@ -198,6 +307,11 @@ class EpisodeMetrics:
     ged_exact: bool
 
     def as_dict(self) -> dict[str, Any]:
+        """The metrics as a plain dict, for result files.
+
+        Returns:
+            The dict.
+        """
         return dict(vars(self))
 
 
@@ -205,7 +319,21 @@ def episode_metrics(explored: ACSG, truth: ACSG, start_positions: Mapping[str, A
                     final_positions: Mapping[str, Any], start_states: Mapping[str, float],
                     final_states: Mapping[str, float], timeout_s: float = 10.0,
                     tolerance_m: float = 0.01) -> EpisodeMetrics:
-    """Every Table I metric of one exploration; a thing within ``tolerance_m`` of its start is back."""
+    """Every Table I metric of one exploration; a thing within ``tolerance_m`` of its start is back.
+
+    Args:
+        explored: the explored graph.
+        truth: the ground truth.
+        start_positions: each thing's start position.
+        final_positions: each thing's final position.
+        start_states: each part's start state.
+        final_states: each part's final state.
+        timeout_s: how long the exact edit distance may take.
+        tolerance_m: how far from its start a thing may be.
+
+    Returns:
+        The metrics.
+    """
     ged = edit_distance(explored, truth, timeout_s)
     return EpisodeMetrics(
         success=ged.value == 0.0 or is_success(explored, truth),
@@ -220,7 +348,17 @@ def episode_metrics(explored: ACSG, truth: ACSG, start_positions: Mapping[str, A
 
 
 def mean_and_sem(values: Iterable[float]) -> tuple[float, float]:
-    """Mean and standard error of the mean, as Table I reports them (± over the variants)."""
+    """Mean and standard error of the mean, as Table I reports them (± over the variants).
+
+    Args:
+        values: the values.
+
+    Returns:
+        The mean and its standard error (0 for one value).
+
+    Raises:
+        ValueError: no values.
+    """
     data = [float(v) for v in values]
     if not data:
         raise ValueError("mean_and_sem: no values")

@@ -18,14 +18,33 @@ _VERB = {"open": "open", "close": "close", "pick": "pick away", "place": "place"
 
 
 def retrieval_actions(graph: ACSG, target: ObjectNode | str) -> list[ActionNode]:
-    """The actions to run before ``target`` (a node, id, instance or label) can be taken."""
+    """The actions to run before ``target`` (a node, id, instance or label) can be taken.
+
+    Args:
+        graph: the graph.
+        target: the object.
+
+    Returns:
+        The actions, in order.
+
+    Raises:
+        UnknownObjectError: the target is unknown or ambiguous.
+    """
     node = target if isinstance(target, ObjectNode) else graph.find_object(target)
     before = ancestors(graph, node.id)
     return [graph.action(n) for n in topological_order(graph, before) if graph.node(n).kind == "action"]
 
 
 def describe_action(graph: ACSG, action: ActionNode) -> str:
-    """'open door (o6)', 'pick away bottle (o4)': the verb, what it acts on and that node's id."""
+    """'open door (o6)', 'pick away bottle (o4)': the verb, what it acts on and that node's id.
+
+    Args:
+        graph: the graph.
+        action: the action.
+
+    Returns:
+        The description.
+    """
     target = graph.object(action.target)
     return f"{_VERB.get(action.type, action.type)} {target.label} ({target.id})"
 
@@ -34,6 +53,17 @@ def retrieval_plan(graph: ACSG, object_label_or_id: str, take: bool = True) -> l
     """The steps to fetch an object, as text: the actions in order, then picking it (``take``).
 
     Unknown or ambiguous names raise `UnknownObjectError` (a ValueError) that lists the choices.
+
+    Args:
+        graph: the graph.
+        object_label_or_id: the object.
+        take: whether picking it ends the plan.
+
+    Returns:
+        The steps.
+
+    Raises:
+        UnknownObjectError: the object is unknown or ambiguous.
     """
     node = graph.find_object(object_label_or_id)
     steps = [describe_action(graph, action) for action in retrieval_actions(graph, node)]

@@ -56,7 +56,15 @@ class Thing:
 
 
 class SymbolicScene:
-    """The scene's state (open parts, things moved to the idle space) and the two interfaces on it."""
+    """The scene's state (open parts, things moved to the idle space) and the two interfaces on it.
+
+    Args:
+        things: the scene's things, each with its parent, what hides it and what it blocks.
+        idle_spot: where things picked away are put.
+
+    Raises:
+        ValueError: an instance id used twice, or one naming a thing not in the scene.
+    """
 
     def __init__(self, things: Iterable[Thing], idle_spot: tuple[float, float, float] = (0.0, -2.0, 0.75)) -> None:
         self.things: dict[str, Thing] = {}
@@ -77,26 +85,60 @@ class SymbolicScene:
 
     # ---- state --------------------------------------------------------------------------------
     def visible(self, instance: str) -> bool:
+        """Whether nothing hides ``instance`` now (every part or thing hiding it open or moved away).
+
+        Args:
+            instance: the thing's instance.
+
+        Returns:
+            Whether it is visible.
+        """
         return all(self._clear(h) for h in self.things[instance].hidden_by)
 
     def _clear(self, hider: str) -> bool:
         return hider in self.open if self.things[hider].part else hider in self.away
 
     def position(self, instance: str) -> np.ndarray:
+        """Where ``instance`` is now: where it was moved to, else where it started.
+
+        Args:
+            instance: the thing's instance.
+
+        Returns:
+            The position.
+        """
         return self.away.get(instance, np.asarray(self.things[instance].position, dtype=float))
 
     def positions(self) -> dict[str, np.ndarray]:
-        """Instance -> where it is now, for every pickable thing."""
+        """Instance -> where it is now, for every pickable thing.
+
+        Returns:
+            The positions.
+        """
         return {i: self.position(i) for i, t in self.things.items() if t.pickable}
 
     def start_positions(self) -> dict[str, np.ndarray]:
+        """Instance -> where it started, for every pickable thing.
+
+        Returns:
+            The positions.
+        """
         return {i: np.asarray(t.position, dtype=float) for i, t in self.things.items() if t.pickable}
 
     def part_states(self) -> dict[str, float]:
-        """Part instance -> 1.0 open, 0.0 closed."""
+        """Part instance -> 1.0 open, 0.0 closed.
+
+        Returns:
+            The states.
+        """
         return {i: float(i in self.open) for i, t in self.things.items() if t.part}
 
     def start_part_states(self) -> dict[str, float]:
+        """Part instance -> 0.0: every part starts closed.
+
+        Returns:
+            The states.
+        """
         return {i: 0.0 for i, t in self.things.items() if t.part}
 
     def _in_the_way(self, part: str) -> list[str]:
@@ -104,6 +146,11 @@ class SymbolicScene:
 
     # ---- Perception -----------------------------------------------------------------------------
     def observe(self) -> list[Detection]:
+        """Everything visible now, as detections (parts with their open state).
+
+        Returns:
+            The detections.
+        """
         found = []
         for i, thing in self.things.items():
             if not self.visible(i):
@@ -118,6 +165,14 @@ class SymbolicScene:
 
     # ---- SkillExecutor ------------------------------------------------------------------------
     def execute(self, call: SkillCall) -> SkillResult:
+        """Run a primitive on the symbolic scene: open, close, pick away, put back or move the camera.
+
+        Args:
+            call: the primitive and what it acts on.
+
+        Returns:
+            How it went; a failure says why.
+        """
         self.calls.append(call)
         instance = call.instance
         if instance not in self.things:
@@ -166,7 +221,14 @@ class SymbolicScene:
     @classmethod
     def from_tabletop(cls, scene: Any) -> SymbolicScene:
         """The symbolic twin of a `TabletopScene`: its ids, parents and relations, hidden places
-        (storage slots behind their access part, things under open-bottom boxes) and blockers."""
+        (storage slots behind their access part, things under open-bottom boxes) and blockers.
+
+        Args:
+            scene: the tabletop scene.
+
+        Returns:
+            The symbolic scene.
+        """
         labels = scene.labels()
         table = next(i for i, label in labels.items() if label["category"] == "table")
 

@@ -25,7 +25,17 @@ class SnapshotError(ValueError):
 
 
 def parse_snapshot(payload: bytes) -> dict[str, Any]:
-    """Decode one snapshot; reject anything else with the reason (never evaluated, only parsed)."""
+    """Decode one snapshot; reject anything else with the reason (never evaluated, only parsed).
+
+    Args:
+        payload: the sample's bytes.
+
+    Returns:
+        The snapshot.
+
+    Raises:
+        SnapshotError: the payload is not a snapshot.
+    """
     try:
         data = json.loads(payload.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
@@ -36,7 +46,15 @@ def parse_snapshot(payload: bytes) -> dict[str, Any]:
 
 
 def render(data: dict[str, Any], colour: bool) -> str:
-    """The snapshot as indented text."""
+    """The snapshot as indented text.
+
+    Args:
+        data: the snapshot.
+        colour: whether to colour statuses with ANSI codes.
+
+    Returns:
+        The text.
+    """
     def paint(text: str, code: str) -> str:
         return f"\x1b[{code}m{text}\x1b[0m" if colour else text
 
@@ -71,6 +89,18 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
     The live tree is redrawn at most ``refresh_hz`` times a second, always with the newest
     snapshot (an agent ticks far faster than a terminal can usefully redraw). JSON output gets
     every snapshot.
+
+    Args:
+        session: the bus session.
+        namespace: the agent's namespace (any agent when None).
+        once: whether to stop after the first snapshot.
+        as_json: whether to print JSON rather than the tree.
+        timeout_s: how long to wait for a snapshot.
+        out: where to print.
+        refresh_hz: redraws a second at most.
+
+    Returns:
+        0, or 1 when no snapshot came in time.
     """
     key = Keys(namespace).agent_tree if namespace else ANY_AGENT_TREE
     inbox: queue.Queue[bytes] = queue.Queue(maxsize=256)

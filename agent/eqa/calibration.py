@@ -28,6 +28,15 @@ class CalibrationError(ValueError):
 
 
 def suite_identity(path: Path, entries: int) -> dict[str, Any]:
+    """Which question suite a calibration was made on: its file name, digest and number of entries.
+
+    Args:
+        path: the suite file.
+        entries: how many of its questions were used.
+
+    Returns:
+        The identity, as kept in the calibration file.
+    """
     return {"file": Path(path).name, "sha256": hashlib.sha256(Path(path).read_bytes()).hexdigest(), "entries": entries}
 
 
@@ -58,10 +67,22 @@ class Calibration:
         return [episode.kappa for episode in self.episodes]
 
     def q_hat(self, epsilon: float) -> float:
-        """q̂(ε) over this file's scores (+∞ when N is too small for 1 − ε)."""
+        """q̂(ε) over this file's scores (+∞ when N is too small for 1 − ε).
+
+        Args:
+            epsilon: ε, the error rate promised (0 < ε < 1).
+
+        Returns:
+            q̂(ε).
+        """
         return conformal_quantile(self.kappas, epsilon)
 
     def to_json(self) -> dict[str, Any]:
+        """The calibration file's JSON form, stamped with its format, version and creation time.
+
+        Returns:
+            The JSON object.
+        """
         body = {
             "format": CALIBRATION_FORMAT,
             "version": CALIBRATION_VERSION,
@@ -85,7 +106,17 @@ def _checksum(body: dict[str, Any]) -> str:
 
 
 def read_calibration(path: Path) -> Calibration:
-    """Load and check a calibration file; every problem is named with the file."""
+    """Load and check a calibration file; every problem is named with the file.
+
+    Args:
+        path: the calibration file.
+
+    Returns:
+        The calibration.
+
+    Raises:
+        CalibrationError: the file is missing, unreadable, or not a calibration of this version.
+    """
     path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
@@ -119,7 +150,16 @@ def read_calibration(path: Path) -> Calibration:
 
 def differences(made: Any, now: Any, prefix: str = "") -> list[str]:
     """The dotted settings where ``now`` differs from ``made`` (both a calibration's `made_with`),
-    each as a line saying both values."""
+    each as a line saying both values.
+
+    Args:
+        made: the settings the calibration was made with (or a part of them).
+        now: the settings now (the same part).
+        prefix: the dotted path down to this part.
+
+    Returns:
+        The lines, sorted by setting.
+    """
     if isinstance(made, dict) and isinstance(now, dict):
         found = []
         for key in sorted(set(made) | set(now)):

@@ -20,7 +20,17 @@ from agent.eqa.answers import StepScores
 
 
 def exact_fraction(epsilon: float | Fraction) -> Fraction:
-    """ε as the decimal the user wrote: 0.3 is 3/10, not the binary double just below it."""
+    """ε as the decimal the user wrote: 0.3 is 3/10, not the binary double just below it.
+
+    Args:
+        epsilon: ε, as a float or an exact fraction.
+
+    Returns:
+        ε as a fraction.
+
+    Raises:
+        ValueError: ε is not in (0, 1).
+    """
     value = epsilon if isinstance(epsilon, Fraction) else Fraction(repr(float(epsilon)))
     if not 0 < value < 1:
         raise ValueError(f"epsilon: {float(epsilon)!r} is not in the open interval (0, 1)")
@@ -32,6 +42,16 @@ def conformal_rank(n: int, epsilon: float | Fraction) -> int:
 
     Floating point gets this wrong at the boundaries (``10 * (1 - 0.7)`` is 3.0000000000000004,
     whose ceiling is 4), which would quietly pick the next order statistic.
+
+    Args:
+        n: N, the number of calibration scores.
+        epsilon: ε, the error rate promised.
+
+    Returns:
+        k.
+
+    Raises:
+        ValueError: no calibration score, or ε not in (0, 1).
     """
     if n < 1:
         raise ValueError("conformal prediction needs at least one calibration score")
@@ -39,7 +59,15 @@ def conformal_rank(n: int, epsilon: float | Fraction) -> int:
 
 
 def conformal_quantile(kappas: Sequence[float], epsilon: float | Fraction) -> float:
-    """q̂(ε): the k-th smallest non-conformity score, or +∞ when there are too few to promise 1 − ε."""
+    """q̂(ε): the k-th smallest non-conformity score, or +∞ when there are too few to promise 1 − ε.
+
+    Args:
+        kappas: the calibration's non-conformity scores κ.
+        epsilon: ε, the error rate promised.
+
+    Returns:
+        q̂(ε).
+    """
     k = conformal_rank(len(kappas), epsilon)
     if k > len(kappas):
         return math.inf
@@ -47,12 +75,30 @@ def conformal_quantile(kappas: Sequence[float], epsilon: float | Fraction) -> fl
 
 
 def conformity_scores(step: StepScores) -> dict[str, float]:
-    """ρ_y^t = Rel·(f̂_y − 1) for every answer letter of one step."""
+    """ρ_y^t = Rel·(f̂_y − 1) for every answer letter of one step.
+
+    Args:
+        step: the step's answer probabilities and relevance.
+
+    Returns:
+        ρ per answer letter.
+    """
     return {letter: step.relevance * (p - 1.0) for letter, p in step.answer_probs.items()}
 
 
 def nonconformity(steps: Iterable[StepScores], truth: str) -> float:
-    """κ = 1 − min_t ρ_truth^t over an episode run to its full budget."""
+    """κ = 1 − min_t ρ_truth^t over an episode run to its full budget.
+
+    Args:
+        steps: the episode's steps.
+        truth: the correct answer's letter.
+
+    Returns:
+        κ.
+
+    Raises:
+        ValueError: no step was scored.
+    """
     rhos = [conformity_scores(step)[truth] for step in steps]
     if not rhos:
         raise ValueError("an episode with no scored step has no non-conformity score")
@@ -60,7 +106,15 @@ def nonconformity(steps: Iterable[StepScores], truth: str) -> float:
 
 
 def sequence_set(steps: Iterable[StepScores], q_hat: float) -> set[str]:
-    """The sequence-level set {y : min_t ρ_y^t ≥ 1 − q̂} of a whole episode."""
+    """The sequence-level set {y : min_t ρ_y^t ≥ 1 − q̂} of a whole episode.
+
+    Args:
+        steps: the episode's steps.
+        q_hat: q̂ from calibration.
+
+    Returns:
+        The letters in the set.
+    """
     minimum: dict[str, float] = {}
     for step in steps:
         for letter, rho in conformity_scores(step).items():
@@ -73,6 +127,10 @@ class PredictionSet:
 
     Before the first step every answer is possible; an answer once excluded never comes back,
     which is why a single remaining answer can be given at once.
+
+    Args:
+        q_hat: q̂ from calibration.
+        letters: the answer letters.
     """
 
     def __init__(self, q_hat: float, letters: Sequence[str]) -> None:
@@ -89,9 +147,22 @@ class PredictionSet:
         return set(self.members)
 
     def sorted(self) -> list[str]:
+        """The answers still in the set, in letter order.
+
+        Returns:
+            The letters.
+        """
         return sorted(self.members)
 
 
 def step_set(rhos: Mapping[str, float], threshold: float) -> set[str]:
-    """C^t: the answers whose score this step is at least the threshold 1 − q̂."""
+    """C^t: the answers whose score this step is at least the threshold 1 − q̂.
+
+    Args:
+        rhos: ρ per answer letter at this step.
+        threshold: 1 − q̂.
+
+    Returns:
+        The letters in C^t.
+    """
     return {letter for letter, rho in rhos.items() if rho >= threshold}

@@ -30,24 +30,64 @@ _QUOTED = re.compile(r"Consider the question: '(.*)'[.,]")
 
 
 def answer_prompt(question: str, choices: list[str]) -> str:
+    """The paper's answer prompt: the question, its lettered choices, and the instruction to answer with a letter.
+
+    Args:
+        question: the question.
+        choices: the choices, lettered in order.
+
+    Returns:
+        The prompt.
+    """
     lines = [question] + [f"{letter}. {choice}" for letter, choice in zip(LETTERS, choices)]
     return "\n".join(lines + [ANSWER_SUFFIX])
 
 
 def relevance_prompt(question: str) -> str:
+    """The paper's prompt asking whether the view helps answer the question.
+
+    Args:
+        question: the question.
+
+    Returns:
+        The prompt.
+    """
     return RELEVANCE_TEMPLATE.format(question=question)
 
 
 def lsv_prompt(question: str) -> str:
+    """The paper's local semantic value prompt: where in the view to look next for the answer.
+
+    Args:
+        question: the question.
+
+    Returns:
+        The prompt.
+    """
     return LSV_TEMPLATE.format(question=question)
 
 
 def gsv_prompt(question: str) -> str:
+    """The paper's global semantic value prompt: whether the view's direction is worth exploring.
+
+    Args:
+        question: the question.
+
+    Returns:
+        The prompt.
+    """
     return GSV_TEMPLATE.format(question=question)
 
 
 def prompt_kind(prompt: str) -> str:
-    """Which of the paper's prompts this is: answer, relevance, lsv, gsv, or other."""
+    """Which of the paper's prompts this is: answer, relevance, lsv, gsv, or other.
+
+    Args:
+        prompt: a prompt's text.
+
+    Returns:
+        The kind.
+    """
     if read_answer_prompt(prompt) is not None:
         return "answer"
     for kind, template in (("relevance", RELEVANCE_TEMPLATE), ("lsv", LSV_TEMPLATE), ("gsv", GSV_TEMPLATE)):
@@ -58,7 +98,14 @@ def prompt_kind(prompt: str) -> str:
 
 
 def read_answer_prompt(prompt: str) -> tuple[str, dict[str, str]] | None:
-    """(question, {letter: choice}) from an answer prompt, None if it is not one."""
+    """(question, {letter: choice}) from an answer prompt, None if it is not one.
+
+    Args:
+        prompt: a prompt's text.
+
+    Returns:
+        The question and its choices by letter, or None.
+    """
     lines = prompt.strip().split("\n")
     if len(lines) < 3 or lines[-1] != ANSWER_SUFFIX:
         return None
@@ -72,6 +119,13 @@ def read_answer_prompt(prompt: str) -> tuple[str, dict[str, str]] | None:
 
 
 def read_quoted_question(prompt: str) -> str | None:
-    """The question inside "Consider the question: '...'" prompts."""
+    """The question inside "Consider the question: '...'" prompts.
+
+    Args:
+        prompt: a prompt's text.
+
+    Returns:
+        The question, or None when the prompt quotes none.
+    """
     match = _QUOTED.search(prompt)
     return match.group(1) if match else None

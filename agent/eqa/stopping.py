@@ -73,12 +73,27 @@ class StopDecision:
 
 
 def entropy(probs: Iterable[float]) -> float:
-    """Shannon entropy in nats; zero probabilities add nothing."""
+    """Shannon entropy in nats; zero probabilities add nothing.
+
+    Args:
+        probs: a distribution's probabilities.
+
+    Returns:
+        The entropy.
+    """
     return -sum(p * math.log(p) for p in probs if p > 0)
 
 
 def fallback_decision(log: AnswerLog, reason: str) -> StopDecision:
-    """Argmax f̂ at the step of highest Rel: the answer when no rule decided earlier."""
+    """Argmax f̂ at the step of highest Rel: the answer when no rule decided earlier.
+
+    Args:
+        log: the episode's scored steps (at least one).
+        reason: why no rule decided (the start of the decision's reason).
+
+    Returns:
+        The decision.
+    """
     best = log.fallback()
     return StopDecision(len(log), best.best(), best.step, f"{reason}: argmax f̂ at the most relevant step")
 
@@ -87,10 +102,21 @@ class StoppingRule(Protocol):
     name: str
 
     def observe(self, log: AnswerLog) -> StopDecision | None:
-        """Look at the newest step of ``log``; a decision stops the robot."""
+        """Look at the newest step of ``log``; a decision stops the robot.
+
+        Args:
+            log: the episode's scored steps so far.
+
+        Returns:
+            The decision to stop, or None to go on.
+        """
 
     def describe(self) -> str:
-        """One line for the tree's feedback: where the rule stands."""
+        """One line for the tree's feedback: where the rule stands.
+
+        Returns:
+            The line.
+        """
 
 
 class BudgetRule:
@@ -106,7 +132,11 @@ class BudgetRule:
 
 
 class EntropyRule:
-    """Stops when the newest answer distribution is sharp (low entropy)."""
+    """Stops when the newest answer distribution is sharp (low entropy).
+
+    Args:
+        threshold: the entropy (nats) below which it stops.
+    """
 
     name = StopRuleName.ENTROPY
 
@@ -126,7 +156,11 @@ class EntropyRule:
 
 
 class RelevanceRule:
-    """Stops when the VLM says it is confident about the view (Rel above the threshold)."""
+    """Stops when the VLM says it is confident about the view (Rel above the threshold).
+
+    Args:
+        threshold: the relevance above which it stops.
+    """
 
     name = StopRuleName.RELEVANCE
 
@@ -146,7 +180,13 @@ class RelevanceRule:
 
 
 class ConformalRule:
-    """Keeps the running conformal prediction set and stops when it holds one answer (or none)."""
+    """Keeps the running conformal prediction set and stops when it holds one answer (or none).
+
+    Args:
+        q_hat: q̂ from calibration.
+        epsilon: ε, the error rate it was calibrated for.
+        letters: the answer letters.
+    """
 
     name = StopRuleName.CP
 
@@ -173,7 +213,16 @@ class ConformalRule:
 
 
 def replay(rule: StoppingRule, steps: Sequence[StepScores], budget: int) -> StopDecision:
-    """What ``rule`` would have done over an episode's recorded steps (at most ``budget`` of them)."""
+    """What ``rule`` would have done over an episode's recorded steps (at most ``budget`` of them).
+
+    Args:
+        rule: a fresh rule.
+        steps: the recorded steps, in order.
+        budget: the most steps the robot could take.
+
+    Returns:
+        The rule's decision, or the fallback decision at the budget.
+    """
     log = AnswerLog()
     for step in steps[:budget]:
         log.add(step.answer_probs, step.relevance)
@@ -184,7 +233,19 @@ def replay(rule: StoppingRule, steps: Sequence[StepScores], budget: int) -> Stop
 
 
 def make_rule(stop: StopConfig, q_hat: float | None, letters: Sequence[str]) -> StoppingRule:
-    """The rule ``stop.rule`` names; the conformal rule needs q̂ from a calibration file."""
+    """The rule ``stop.rule`` names; the conformal rule needs q̂ from a calibration file.
+
+    Args:
+        stop: the stopping settings.
+        q_hat: q̂ from a calibration file, or None.
+        letters: the question's answer letters.
+
+    Returns:
+        The rule.
+
+    Raises:
+        ValueError: the conformal rule without q̂.
+    """
     if stop.rule == StopRuleName.CP:
         if q_hat is None:
             raise ValueError("stop.rule cp needs q̂ from a calibration file")

@@ -14,12 +14,26 @@ _STORAGE_WORDS = "|".join(re.escape(w) for w in sorted(STORAGE_CATEGORIES, key=l
 
 
 def storage_in_question(question: str) -> str | None:
-    """The kind of storage the question asks what is in ("in the fridge", "inside the cabinet")."""
+    """The kind of storage the question asks what is in ("in the fridge", "inside the cabinet").
+
+    Args:
+        question: the question.
+
+    Returns:
+        The storage word, or None.
+    """
     found = re.search(rf"\b(?:in|inside) the ({_STORAGE_WORDS})\b", question.lower())
     return found.group(1) if found else None
 
 
 def room_in_question(question: str) -> str | None:
-    """The room the storage the question asks about stands in ("in the cabinet in the laundry room")."""
+    """The room the storage the question asks about stands in ("in the cabinet in the laundry room").
+
+    Args:
+        question: the question.
+
+    Returns:
+        The room's name, or None.
+    """
     found = re.search(rf"\b(?:in|inside) the (?:{_STORAGE_WORDS}) in the ([a-z ]+?)\s*\?*$", question.lower().strip())
     return found.group(1) if found else None

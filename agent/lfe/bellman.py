@@ -42,6 +42,17 @@ def metres_to_steps(metres: ArrayLike, step_length_m: float, steps_per_move: flo
 
     The paper plans in steps but measures distances on the grid; 1.7 steps per forward move
     accounts for the turns a differential robot makes along a grid path.
+
+    Args:
+        metres: the distances (m).
+        step_length_m: the length of one forward move.
+        steps_per_move: the turn factor.
+
+    Returns:
+        The distances in steps.
+
+    Raises:
+        ValueError: the step length is not positive.
     """
     if not step_length_m > 0:
         raise ValueError(f"step_length_m must be positive, got {step_length_m}")
@@ -58,6 +69,18 @@ def distance_matrix(spec: GridSpec, traversable: np.ndarray, sources: Sequence[t
     per planning step. The matrix need not be symmetric: a start cell counts as traversable
     whatever the mask says (the robot stands there), so a frontier centre inside the clearance
     margin can be left but not entered.
+
+    Args:
+        spec: the grid.
+        traversable: the cells the robot may cross (bool, the grid's shape).
+        sources: the robot's cell, then each frontier's centre.
+        cell_cost: each cell's weight (1 everywhere when None).
+
+    Returns:
+        The (N, N) matrix (m).
+
+    Raises:
+        ValueError: the mask is not bool or not the grid's shape.
     """
     traversable = np.asarray(traversable)
     if traversable.dtype != bool:
@@ -92,6 +115,13 @@ def largest(area: ArrayLike, k: int = PLANNED_FRONTIERS) -> np.ndarray:
 
     Callers can select with this before computing the distance matrix, so that only k + 1
     distance fields are needed.
+
+    Args:
+        area: R_A per frontier.
+        k: how many to keep.
+
+    Returns:
+        The indices.
     """
     area = _vector(area, "area")
     return np.argsort(-area, kind="stable")[:k]
@@ -109,6 +139,20 @@ def plan(area: ArrayLike, d_in: ArrayLike, d_out: ArrayLike, distances: ArrayLik
     as in the paper, then the lower index. There is no memoisation: σ after a prefix depends on its
     order, so (node, remaining set, σ) almost never repeats, and the six-frontier tree is only
     1956 evaluations.
+
+    Args:
+        area: R_A per frontier.
+        d_in: D_in per frontier (steps).
+        d_out: D_out per frontier (steps).
+        distances: the known-space distances (steps), robot first.
+        sigma: the steps left.
+        max_frontiers: how many frontiers enter the recursion.
+
+    Returns:
+        The plan: the choice, its sequence and the Q values.
+
+    Raises:
+        ValueError: arrays of the wrong shape or with nan.
     """
     area = _vector(area, "area")
     d_in = _vector(d_in, "d_in", len(area))
@@ -151,6 +195,22 @@ def choose_frontier(area: ArrayLike, d_in_m: ArrayLike, d_out_m: ArrayLike, spec
     known-space distances (and the robot's) are computed: seven distance fields, once. The plan's
     indices (``choice``, ``sequence``, ``q_values``) are into the full arrays. ``timer`` times the
     two parts, "distances" and "recursion" (`homebot bench plan`).
+
+    Args:
+        area: R_A per frontier (m²).
+        d_in_m: D_in per frontier (m).
+        d_out_m: D_out per frontier (m).
+        spec: the grid.
+        traversable: the cells the robot may cross.
+        robot_cell: the robot's cell (row, col).
+        centres: each frontier's centre cell.
+        sigma: the steps left.
+        step_length_m: the length of one forward move.
+        steps_per_move: the turn factor.
+        timer: times the two parts, if given.
+
+    Returns:
+        The plan.
     """
     area = _vector(area, "area")
     chosen = largest(area)
@@ -167,12 +227,29 @@ def choose_frontier(area: ArrayLike, d_in_m: ArrayLike, d_out_m: ArrayLike, spec
 
 
 def greedy(area: ArrayLike) -> int:
-    """The frontier with the largest R_A (PONI-Greedy, Greedy-R°); ties go to the lower index."""
+    """The frontier with the largest R_A (PONI-Greedy, Greedy-R°); ties go to the lower index.
+
+    Args:
+        area: R_A per frontier.
+
+    Returns:
+        The frontier's index.
+    """
     return int(np.argmax(_vector(area, "area")))
 
 
 def nearest(from_robot: ArrayLike) -> int:
-    """The frontier with the smallest D_k (FBE-Near); ties go to the lower index."""
+    """The frontier with the smallest D_k (FBE-Near); ties go to the lower index.
+
+    Args:
+        from_robot: D_k per frontier.
+
+    Returns:
+        The frontier's index.
+
+    Raises:
+        ValueError: no distance, a nan, or no frontier reachable.
+    """
     from_robot = np.asarray(from_robot, dtype=float)
     if from_robot.ndim != 1 or len(from_robot) == 0 or np.isnan(from_robot).any():
         raise ValueError(f"from_robot must be a non-empty 1-D array without nan, got shape {from_robot.shape}")

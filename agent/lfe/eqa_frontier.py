@@ -16,7 +16,19 @@ from agent.planning.frontier_plan import Candidates
 
 def lfe_frontier(world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates,
                  estimator: LearnedEstimator, steps_left: int, step_length_m: float) -> Plan:
-    """The candidate frontier to explore next, with the learned R_A, D_in and D_out."""
+    """The candidate frontier to explore next, with the learned R_A, D_in and D_out.
+
+    Args:
+        world_map: the robot's map.
+        robot_xy: where the robot stands.
+        candidates: the frontiers and the cells the robot may cross.
+        estimator: the learned frontier-property estimator.
+        steps_left: the episode's steps left (σ; at least 1).
+        step_length_m: the length of one forward move.
+
+    Returns:
+        The plan.
+    """
     properties = estimator.estimate(world_map.free, world_map.occupied, world_map.spec.resolution,
                                     candidates.frontiers)
     robot_cell = tuple(int(v) for v in world_map.spec.to_cell(robot_xy))

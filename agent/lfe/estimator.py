@@ -38,7 +38,13 @@ depth 4), enough for the network to see that the map ends there and to predict i
 
 
 class LearnedEstimator:
-    """R_A, D_in and D_out of frontiers, predicted by a `FrontierUNet` from the occupancy map."""
+    """R_A, D_in and D_out of frontiers, predicted by a `FrontierUNet` from the occupancy map.
+
+    Args:
+        model: the network (put in eval mode on ``device``).
+        config: its config.
+        device: the torch device.
+    """
 
     def __init__(self, model: FrontierUNet, config: UNetConfig, device: torch.device | str = "cpu") -> None:
         self.model = model.to(device).eval()
@@ -47,7 +53,19 @@ class LearnedEstimator:
 
     @classmethod
     def load(cls, path: Path | None = None, device: str | None = None) -> LearnedEstimator:
-        """The estimator of a model file (by default the one shipped with homebot), on ``device`` (cpu)."""
+        """The estimator of a model file (by default the one shipped with homebot), on ``device`` (cpu).
+
+        Args:
+            path: the model file (the shipped one when None).
+            device: the torch device (cpu when None).
+
+        Returns:
+            The estimator.
+
+        Raises:
+            FileNotFoundError: no model file there.
+            ModelFileError: the file is not a readable model.
+        """
         path = SHIPPED_MODEL if path is None else Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no frontier-property model there; train one with "
@@ -63,6 +81,15 @@ class LearnedEstimator:
         coarsened to the network's resolution by `encode_map`, which must divide evenly. Pass all
         of the map's frontiers, not a chosen few: the network was trained with every frontier
         marked in its input, and a frontier's neighbours are part of what it reads.
+
+        Args:
+            free: the known free cells.
+            occupied: the known occupied cells.
+            resolution: the map's cell size (m).
+            frontiers: every frontier of the map.
+
+        Returns:
+            R_A, D_in and D_out of each frontier.
         """
         if len(frontiers) == 0:
             return []

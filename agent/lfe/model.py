@@ -77,11 +77,26 @@ class UNetConfig:
         return 2 ** (self.depth - 1)
 
     def to_dict(self) -> dict[str, Any]:
+        """The config as plain data, for model files.
+
+        Returns:
+            The dict.
+        """
         return asdict(self)
 
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> UNetConfig:
-        """The config from `to_dict`'s output; unknown keys are an error, not silently dropped."""
+        """The config from `to_dict`'s output; unknown keys are an error, not silently dropped.
+
+        Args:
+            values: the dict.
+
+        Returns:
+            The config.
+
+        Raises:
+            ValueError: an unknown key.
+        """
         unknown = set(values) - {f.name for f in fields(cls)}
         if unknown:
             raise ValueError(f"unknown UNetConfig fields: {', '.join(sorted(unknown))}")
@@ -94,12 +109,26 @@ def _require_int(value: Any, name: str, minimum: int) -> None:
 
 
 def to_network(targets: torch.Tensor | np.ndarray) -> torch.Tensor:
-    """Natural units (m², m, m) -> the values the network learns (log1p, so every scale counts)."""
+    """Natural units (m², m, m) -> the values the network learns (log1p, so every scale counts).
+
+    Args:
+        targets: R_A, D_in, D_out in natural units.
+
+    Returns:
+        The network's units.
+    """
     return torch.log1p(torch.as_tensor(targets, dtype=torch.float32))
 
 
 def from_network(outputs: torch.Tensor) -> torch.Tensor:
-    """The network's outputs -> natural units, clipped at zero (no area or length is negative)."""
+    """The network's outputs -> natural units, clipped at zero (no area or length is negative).
+
+    Args:
+        outputs: the network's outputs.
+
+    Returns:
+        Natural units.
+    """
     return torch.expm1(outputs).clamp_min(0.0)
 
 
@@ -107,6 +136,16 @@ def encode_input(maps: torch.Tensor | np.ndarray, frontier_mask: torch.Tensor | 
     """(B, 4, H, W) float input: one-hot unknown / occupied / free, then the frontier pixels.
 
     ``maps`` holds `encode_map` values (B, H, W); ``frontier_mask`` is true (or 1) on frontier pixels.
+
+    Args:
+        maps: the encoded maps (B, H, W).
+        frontier_mask: the frontier pixels (B, H, W).
+
+    Returns:
+        The input.
+
+    Raises:
+        ValueError: shapes that differ or a map value out of range.
     """
     maps = torch.as_tensor(maps)
     mask = torch.as_tensor(frontier_mask)
@@ -124,6 +163,14 @@ def map_window(encoded: np.ndarray, corner: np.ndarray, size: tuple[int, int]) -
 
     Training crops and the estimator's view of a map are both cut this way, so the network meets
     the map's edges the same way in both.
+
+    Args:
+        encoded: the encoded map.
+        corner: the window's top-left cell (may lie off the map).
+        size: the window's (rows, cols).
+
+    Returns:
+        The window.
     """
     window = np.full(size, UNKNOWN, dtype=np.uint8)
     corner = np.asarray(corner)
@@ -156,6 +203,9 @@ class FrontierUNet(nn.Module):
     Inputs of any size are padded (with zeros) to a multiple of ``config.multiple`` and the output
     is cropped back; callers that can should pad with unknown map cells themselves, which is what
     the network saw around the edges during training.
+
+    Args:
+        config: the channels, depth and padding multiple.
     """
 
     def __init__(self, config: UNetConfig) -> None:
@@ -170,7 +220,14 @@ class FrontierUNet(nn.Module):
         self.head = nn.Conv2d(widths[0], config.out_channels, 1)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """(B, in_channels, H, W) -> (B, out_channels, H, W) in network units (see `from_network`)."""
+        """(B, in_channels, H, W) -> (B, out_channels, H, W) in network units (see `from_network`).
+
+        Args:
+            x: the input (`encode_input`).
+
+        Returns:
+            The outputs.
+        """
         height, width = x.shape[-2:]
         multiple = self.config.multiple
         x = F.pad(x, (0, -width % multiple, 0, -height % multiple))
@@ -185,7 +242,17 @@ class FrontierUNet(nn.Module):
 
 
 def save_model(path: Path, model: FrontierUNet, config: UNetConfig, metadata: dict[str, Any]) -> None:
-    """Write config, weights and metadata to one file, atomically (a reader never sees half a file)."""
+    """Write config, weights and metadata to one file, atomically (a reader never sees half a file).
+
+    Args:
+        path: the file.
+        model: the network.
+        config: its config.
+        metadata: what to keep with it (JSON-able).
+
+    Raises:
+        ValueError: metadata that is not JSON-able.
+    """
     try:
         json.dumps(metadata)
     except (TypeError, ValueError) as exc:
@@ -196,7 +263,19 @@ def save_model(path: Path, model: FrontierUNet, config: UNetConfig, metadata: di
 
 
 def load_model(path: Path, device: str | torch.device | None = None) -> tuple[FrontierUNet, UNetConfig, dict[str, Any]]:
-    """(model in eval mode on ``device`` (default cpu), its config, its metadata) from `save_model`'s file."""
+    """(model in eval mode on ``device`` (default cpu), its config, its metadata) from `save_model`'s file.
+
+    Args:
+        path: the file.
+        device: the torch device (cpu when None).
+
+    Returns:
+        The model, its config and its metadata.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ModelFileError: the file is corrupt or not a model file.
+    """
     path = Path(path)
     contents = load_plain(path)
     if contents.get("format") != FILE_FORMAT:
@@ -212,7 +291,12 @@ def load_model(path: Path, device: str | torch.device | None = None) -> tuple[Fr
 
 
 def atomic_save(contents: dict[str, Any], path: Path) -> None:
-    """``torch.save`` through a temporary file and a rename, so an interrupted write leaves the old file."""
+    """``torch.save`` through a temporary file and a rename, so an interrupted write leaves the old file.
+
+    Args:
+        contents: what to save.
+        path: the file.
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(path.name + ".partial")
     torch.save(contents, partial)
@@ -220,7 +304,18 @@ def atomic_save(contents: dict[str, Any], path: Path) -> None:
 
 
 def load_plain(path: Path) -> dict[str, Any]:
-    """A dict written by `atomic_save`, read without running code; clear errors naming the path."""
+    """A dict written by `atomic_save`, read without running code; clear errors naming the path.
+
+    Args:
+        path: the file.
+
+    Returns:
+        The dict.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ModelFileError: the file is corrupt or not a torch file.
+    """
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     try:

@@ -53,7 +53,15 @@ class FrontierProperties:
     d_out_m: float
 
     def steps(self, step_length_m: float, steps_per_move: float = STEPS_PER_MOVE) -> tuple[float, float]:
-        """(D_in, D_out) in time steps, for the Bellman planner."""
+        """(D_in, D_out) in time steps, for the Bellman planner.
+
+        Args:
+            step_length_m: the length of one forward move.
+            steps_per_move: the turn factor.
+
+        Returns:
+            D_in and D_out (steps).
+        """
         d_in, d_out = metres_to_steps([self.d_in_m, self.d_out_m], step_length_m, steps_per_move)
         return float(d_in), float(d_out)
 
@@ -81,6 +89,17 @@ def unseen_space(free: np.ndarray, observed: np.ndarray, resolution: float) -> U
     ``free`` is the ground-truth free mask, ``observed`` the cells the partial map has seen (both
     bool, same 2-D shape). The skeleton of all regions at once equals the union of their skeletons,
     since thinning only looks at 8-neighbours and distinct regions have none in common.
+
+    Args:
+        free: the true free cells.
+        observed: the cells seen.
+        resolution: the cell size (m).
+
+    Returns:
+        The regions, their skeleton and its graph.
+
+    Raises:
+        ValueError: masks of different shapes, or a resolution that is not positive.
     """
     free = _mask(free, "free")
     observed = _mask(observed, "observed")
@@ -108,7 +127,15 @@ def unseen_space(free: np.ndarray, observed: np.ndarray, resolution: float) -> U
 
 
 def region_beyond(space: UnseenSpace, frontier: Frontier | np.ndarray) -> np.ndarray:
-    """The bool mask of unseen free space beyond a frontier (the regions its cells touch)."""
+    """The bool mask of unseen free space beyond a frontier (the regions its cells touch).
+
+    Args:
+        space: the analysed map.
+        frontier: the frontier, or its cells.
+
+    Returns:
+        The mask.
+    """
     return np.isin(space.labels, _touching_regions(space, frontier_cells_of(frontier, space.labels.shape)))
 
 
@@ -121,6 +148,13 @@ def frontier_properties(space: UnseenSpace, frontier: Frontier | np.ndarray) -> 
     (or skeleton pieces) lie beyond one frontier, each is toured from its own entry and the robot
     comes back out of all but the last; the last is the one with the longest way out, which keeps
     D_in smallest.
+
+    Args:
+        space: the analysed map (`unseen_space`).
+        frontier: the frontier, or its cells.
+
+    Returns:
+        The properties (m², m, m).
     """
     cells = frontier_cells_of(frontier, space.labels.shape)
     regions = _touching_regions(space, cells)
@@ -135,7 +169,17 @@ def frontier_properties(space: UnseenSpace, frontier: Frontier | np.ndarray) -> 
 
 def label_frontiers(free: np.ndarray, observed: np.ndarray, frontiers: Sequence[Frontier | np.ndarray],
                     resolution: float) -> list[FrontierProperties]:
-    """The properties of every frontier of one map, in order, sharing one `unseen_space`."""
+    """The properties of every frontier of one map, in order, sharing one `unseen_space`.
+
+    Args:
+        free: the true free cells.
+        observed: the cells seen.
+        frontiers: the map's frontiers, or their cells.
+        resolution: the cell size (m).
+
+    Returns:
+        The properties, one per frontier.
+    """
     space = unseen_space(free, observed, resolution)
     return [frontier_properties(space, frontier) for frontier in frontiers]
 
@@ -147,6 +191,15 @@ def tour_split(distances: np.ndarray) -> tuple[float, float]:
     the one with the smallest D_in is taken (for a symmetric matrix: the direction that explores the
     near side first). Exact up to `EXACT_TOUR_NODES` nodes (Held–Karp); beyond, networkx's greedy
     tour improved by 2-opt.
+
+    Args:
+        distances: the square distance matrix.
+
+    Returns:
+        D_in and D_out.
+
+    Raises:
+        ValueError: the matrix is empty or not square.
     """
     distances = np.asarray(distances, dtype=float)
     n = len(distances)
@@ -320,7 +373,18 @@ def _touching_regions(space: UnseenSpace, cells: np.ndarray) -> np.ndarray:
 
 
 def frontier_cells_of(frontier: Frontier | np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """A frontier's (K, 2) integer cells, checked against the grid."""
+    """A frontier's (K, 2) integer cells, checked against the grid.
+
+    Args:
+        frontier: the frontier, or its cells.
+        shape: the grid's shape.
+
+    Returns:
+        The cells.
+
+    Raises:
+        ValueError: cells that are empty, not integers, or off the grid.
+    """
     cells = np.asarray(frontier.cells if isinstance(frontier, Frontier) else frontier)
     if cells.ndim != 2 or cells.shape[1] != 2 or len(cells) == 0:
         raise ValueError(f"frontier cells must be a non-empty (K, 2) array of (row, col), got shape {cells.shape}")

@@ -20,7 +20,18 @@ UNKNOWN, OCCUPIED, FREE = 0, 1, 2
 
 
 def coarsening_factor(resolution: float, model_resolution: float) -> int:
-    """How many fine cells a side of one coarse cell holds; they must divide exactly."""
+    """How many fine cells a side of one coarse cell holds; they must divide exactly.
+
+    Args:
+        resolution: the fine cell size (m).
+        model_resolution: the coarse cell size (m).
+
+    Returns:
+        The factor.
+
+    Raises:
+        ValueError: a size that is not positive, or one that does not divide the other.
+    """
     if not (np.isfinite(resolution) and resolution > 0):
         raise ValueError(f"resolution must be a positive number of metres, got {resolution}")
     if not (np.isfinite(model_resolution) and model_resolution > 0):
@@ -38,6 +49,18 @@ def encode_map(free: np.ndarray, occupied: np.ndarray, resolution: float, model_
     ``resolution``; a cell in both counts as occupied. A grid whose sides are not a multiple of the
     factor is padded with unknown cells at the far (last row, last column) edges, so fine cell
     (r, c) always lies in coarse cell (r // f, c // f).
+
+    Args:
+        free: the known free cells.
+        occupied: the known occupied cells.
+        resolution: their cell size (m).
+        model_resolution: the coarse cell size (m).
+
+    Returns:
+        The encoded map.
+
+    Raises:
+        ValueError: masks that are not bool, not 2-D or of different shapes; sizes that do not divide.
     """
     free, occupied = np.asarray(free), np.asarray(occupied)
     if free.dtype != bool or occupied.dtype != bool:
@@ -57,7 +80,18 @@ def encode_map(free: np.ndarray, occupied: np.ndarray, resolution: float, model_
 
 
 def coarse_cells(cells: np.ndarray, factor: int) -> np.ndarray:
-    """The distinct coarse cells (K', 2) holding fine cells (K, 2) (rows, cols), in row-major order."""
+    """The distinct coarse cells (K', 2) holding fine cells (K, 2) (rows, cols), in row-major order.
+
+    Args:
+        cells: the fine cells.
+        factor: the coarsening factor.
+
+    Returns:
+        The coarse cells.
+
+    Raises:
+        ValueError: a factor below 1.
+    """
     cells = np.asarray(cells, dtype=int).reshape(-1, 2)
     if factor < 1:
         raise ValueError(f"factor must be at least 1, got {factor}")
@@ -70,6 +104,12 @@ def frontier_pixel_mask(encoded: np.ndarray) -> np.ndarray:
     A frontier's pixels are the coarse cells of its fine cells (`coarse_cells`) that this mask
     holds; the training data hold exactly those, so a planner should average the network's
     outputs over the same.
+
+    Args:
+        encoded: the encoded map.
+
+    Returns:
+        The mask.
     """
     unknown_near = ndimage.binary_dilation(encoded == UNKNOWN, structure=np.ones((3, 3), dtype=bool))
     return (encoded == FREE) & unknown_near

@@ -38,6 +38,14 @@ class PanoramicSensor:
     The grid is copied once with a border of occupied cells as wide as the range, so that every
     ray cell of a scan is a valid index: a scan is then one flat lookup per ray cell, with no
     bounds checks, several times faster than gathering by rows and columns.
+
+    Args:
+        occupied: the true occupied cells (2-D bool).
+        resolution: the cell size (m).
+        range_m: the sensor's range (at least one cell).
+
+    Raises:
+        ValueError: a mask that is not 2-D bool, or a resolution or range out of bounds.
     """
 
     def __init__(self, occupied: np.ndarray, resolution: float, range_m: float) -> None:
@@ -68,6 +76,15 @@ class PanoramicSensor:
         Each ray sees the cells it crosses up to and including the first occupied one; outside the
         grid counts as occupied but is not reported, so a grid without walls round it is fine. The
         robot's own cell counts as seen free: it stands there.
+
+        Args:
+            cell: the sensor's cell.
+
+        Returns:
+            The cells seen.
+
+        Raises:
+            ValueError: the cell lies outside the grid.
         """
         row, col = int(cell[0]), int(cell[1])
         if not (0 <= row < self.shape[0] and 0 <= col < self.shape[1]):

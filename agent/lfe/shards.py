@@ -29,11 +29,30 @@ SHARD_GLOB = "home-*.npz"
 
 
 def shard_path(out_dir: Path, seed: int) -> Path:
+    """Where the shard of the home made with ``seed`` is written in ``out_dir``.
+
+    Args:
+        out_dir: the data directory.
+        seed: the home's seed.
+
+    Returns:
+        The path.
+    """
     return Path(out_dir) / f"home-{seed:05d}.npz"
 
 
 def shard_paths(data_dir: Path) -> list[Path]:
-    """The shards of a data directory, sorted by name; an error if there are none."""
+    """The shards of a data directory, sorted by name; an error if there are none.
+
+    Args:
+        data_dir: the data directory.
+
+    Returns:
+        The paths.
+
+    Raises:
+        FileNotFoundError: no shard there.
+    """
     paths = sorted(Path(data_dir).glob(SHARD_GLOB))
     if not paths:
         raise FileNotFoundError(f"{data_dir}: no training shards ({SHARD_GLOB})")
@@ -41,7 +60,12 @@ def shard_paths(data_dir: Path) -> list[Path]:
 
 
 def write_shard(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Write a shard under a temporary name and rename it into place, so it appears whole or not at all."""
+    """Write a shard under a temporary name and rename it into place, so it appears whole or not at all.
+
+    Args:
+        path: the shard.
+        arrays: its arrays.
+    """
     partial = path.with_name(path.name + ".part")
     with open(partial, "wb") as handle:
         np.savez_compressed(handle, **arrays)
@@ -49,7 +73,17 @@ def write_shard(path: Path, arrays: dict[str, np.ndarray]) -> None:
 
 
 def load_shard(path: Path) -> dict[str, np.ndarray]:
-    """Read one shard and check it: a ValueError naming the file and the field when it is malformed."""
+    """Read one shard and check it: a ValueError naming the file and the field when it is malformed.
+
+    Args:
+        path: the shard.
+
+    Returns:
+        Its arrays by name.
+
+    Raises:
+        ValueError: the file is unreadable or a field is malformed.
+    """
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as archive:

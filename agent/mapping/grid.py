@@ -20,25 +20,57 @@ class GridSpec:
 
     @classmethod
     def centred(cls, centre_xy: tuple[float, float], size_m: float, resolution: float) -> GridSpec:
+        """A square grid of at least ``size_m`` a side centred on a point.
+
+        Args:
+            centre_xy: the centre (world, m).
+            size_m: the side (rounded up to whole cells).
+            resolution: the cell size (m).
+
+        Returns:
+            The grid.
+        """
         cells = int(np.ceil(size_m / resolution))
         half = cells * resolution / 2
         return cls((centre_xy[0] - half, centre_xy[1] - half), resolution, (cells, cells))
 
     def to_cell(self, xy: np.ndarray) -> np.ndarray:
-        """World (..., 2) points -> integer (..., 2) cells as (row, col); may fall outside the grid."""
+        """World (..., 2) points -> integer (..., 2) cells as (row, col); may fall outside the grid.
+
+        Args:
+            xy: the world points.
+
+        Returns:
+            The cells.
+        """
         xy = np.asarray(xy, dtype=float)
         col = np.floor((xy[..., 0] - self.origin_xy[0]) / self.resolution)
         row = np.floor((xy[..., 1] - self.origin_xy[1]) / self.resolution)
         return np.stack([row, col], axis=-1).astype(int)
 
     def to_world(self, cells: np.ndarray) -> np.ndarray:
-        """Integer (..., 2) cells as (row, col) -> world (..., 2) cell centres as (x, y)."""
+        """Integer (..., 2) cells as (row, col) -> world (..., 2) cell centres as (x, y).
+
+        Args:
+            cells: the cells.
+
+        Returns:
+            The cell centres.
+        """
         cells = np.asarray(cells, dtype=float)
         x = self.origin_xy[0] + (cells[..., 1] + 0.5) * self.resolution
         y = self.origin_xy[1] + (cells[..., 0] + 0.5) * self.resolution
         return np.stack([x, y], axis=-1)
 
     def inside(self, cells: np.ndarray) -> np.ndarray:
+        """Which cells (..., 2) lie within the grid.
+
+        Args:
+            cells: the cells as (row, col).
+
+        Returns:
+            A boolean (...) array.
+        """
         cells = np.asarray(cells)
         return (
             (cells[..., 0] >= 0)
@@ -51,6 +83,13 @@ class GridSpec:
         """A boolean grid that is true on cells whose centre lies within ``radius_m`` of the point.
 
         Only the window around the disc is computed: the map is large and this runs every step.
+
+        Args:
+            centre_xy: the disc's centre (world, m).
+            radius_m: its radius.
+
+        Returns:
+            The grid's boolean mask.
         """
         mask = np.zeros(self.shape, dtype=bool)
         centre = np.asarray(centre_xy, dtype=float)
@@ -64,6 +103,10 @@ class GridSpec:
         return mask
 
     def extent(self) -> tuple[float, float, float, float]:
-        """(xmin, xmax, ymin, ymax), for plotting."""
+        """(xmin, xmax, ymin, ymax), for plotting.
+
+        Returns:
+            The extent.
+        """
         x0, y0 = self.origin_xy
         return (x0, x0 + self.shape[1] * self.resolution, y0, y0 + self.shape[0] * self.resolution)

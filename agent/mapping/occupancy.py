@@ -62,7 +62,15 @@ class OccupancyConfig:
 
 def lattice_grid(centre_xy: tuple[float, float], config: OccupancyConfig) -> GridSpec:
     """A square grid of ``config.size_m`` around ``centre_xy`` whose cell centres lie on the voxel
-    lattice: its origin is half a voxel off a lattice line, so no voxel sits on a cell boundary."""
+    lattice: its origin is half a voxel off a lattice line, so no voxel sits on a cell boundary.
+
+    Args:
+        centre_xy: the grid's centre (world, m).
+        config: the map's settings (size, resolution, voxel size).
+
+    Returns:
+        The grid.
+    """
     voxel = config.tsdf.voxel_size
     cells = int(np.ceil(config.size_m / config.resolution))
     half = cells * config.resolution / 2
@@ -75,6 +83,14 @@ def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> 
 
     ``spec`` must be a `lattice_grid`: cells are found from voxel indices, whose positions then lie
     a quarter cell or more from every cell boundary.
+
+    Args:
+        spec: the grid (a `lattice_grid`).
+        voxels: the TSDF's voxels.
+        config: the map's settings (heights, surface band).
+
+    Returns:
+        floor_seen and occupied.
     """
     surface = surface_voxels(voxels, config.surface_tsdf, 0.5 / config.tsdf.trunc_voxels)
     points = voxels.points[surface]
@@ -92,7 +108,12 @@ def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> 
 
 
 class ExplorationMap:
-    """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids."""
+    """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids.
+
+    Args:
+        start_xy: where the robot starts (the grid's centre).
+        config: the map's settings.
+    """
 
     def __init__(self, start_xy: tuple[float, float], config: OccupancyConfig = OccupancyConfig()) -> None:
         self.config = config
@@ -109,7 +130,14 @@ class ExplorationMap:
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
                   robot_xy: tuple[float, float]) -> None:
-        """Fuse one frame taken with the robot at ``robot_xy``."""
+        """Fuse one frame taken with the robot at ``robot_xy``.
+
+        Args:
+            depth: the linear depth image (m; 0 = no return).
+            intrinsics: the camera's intrinsics.
+            camera_to_world: the camera's world pose (4x4).
+            robot_xy: where the robot stood.
+        """
         config = self.config
         self.revision += 1
         self.tsdf.integrate(depth, intrinsics, camera_to_world)
@@ -152,7 +180,11 @@ class ExplorationMap:
         self.occupied &= ~self.driven | self.bumped
 
     def mark_contact(self, point_xy: tuple[float, float]) -> None:
-        """Record an obstacle the robot touched but may never have seen (too low, too near)."""
+        """Record an obstacle the robot touched but may never have seen (too low, too near).
+
+        Args:
+            point_xy: where it touched (world, m).
+        """
         self.revision += 1
         self.bumped |= self.spec.disc(point_xy, self.spec.resolution)
         self.occupied |= self.bumped
@@ -162,7 +194,11 @@ class ExplorationMap:
         return (self.floor_seen | self.stood) & ~self.occupied
 
     def clearance(self) -> np.ndarray:
-        """Distance in metres from each cell to the nearest occupied cell."""
+        """Distance in metres from each cell to the nearest occupied cell.
+
+        Returns:
+            The distances, one per cell.
+        """
         return ndimage.distance_transform_edt(~self.occupied) * self.spec.resolution
 
     def traversable(self, robot_xy: tuple[float, float], clearance: np.ndarray | None = None,
@@ -176,6 +212,14 @@ class ExplorationMap:
         not push on. ``squeeze_m`` lets a move try gaps that look narrower than the robot on the
         map: its obstacles stand up to a surface band (``surface_tsdf`` of the truncation) fatter
         than they are.
+
+        Args:
+            robot_xy: where the robot stands.
+            clearance: `clearance`, when already computed.
+            squeeze_m: how much narrower than the robot a gap may look.
+
+        Returns:
+            A boolean grid of the cells the robot may move through.
         """
         clearance = self.clearance() if clearance is None else clearance
         radius = self.config.robot_radius - squeeze_m
@@ -187,4 +231,9 @@ class ExplorationMap:
         return self.free & ((clearance > radius) | way_out)
 
     def free_area_m2(self) -> float:
+        """The area of the cells seen free (m²).
+
+        Returns:
+            The area.
+        """
         return float(self.free.sum()) * self.spec.resolution**2

@@ -39,7 +39,16 @@ class SemanticValueConfig:
 
 def semantic_value(lsv_p: float | np.ndarray, gsv: float,
                    config: SemanticValueConfig = SemanticValueConfig()) -> np.ndarray:
-    """SV_p = exp(τ_LSV·LSV_p + τ_GSV·GSV), eq. (3); ``lsv_p`` may hold one value per prompt point."""
+    """SV_p = exp(τ_LSV·LSV_p + τ_GSV·GSV), eq. (3); ``lsv_p`` may hold one value per prompt point.
+
+    Args:
+        lsv_p: LSV of each prompt point (or one).
+        gsv: GSV of the view.
+        config: the temperatures τ.
+
+    Returns:
+        SV_p, shaped like ``lsv_p``.
+    """
     return np.exp(config.tau_lsv * np.asarray(lsv_p, dtype=float) + config.tau_gsv * gsv)
 
 
@@ -49,6 +58,15 @@ def indifferent_value(config: SemanticValueConfig = SemanticValueConfig(), num_p
 
     Used as the map's default so that unvalued cells sit in the middle of the range that real
     answers produce under the same ablation.
+
+    Args:
+        config: the temperatures τ.
+        num_points: the prompt points per view.
+        use_lsv: whether LSV counts (ablation).
+        use_gsv: whether GSV counts (ablation).
+
+    Returns:
+        The SV.
     """
     lsv = 1.0 / num_points if use_lsv else 0.0
     gsv = 0.5 if use_gsv else 0.0
@@ -56,7 +74,13 @@ def indifferent_value(config: SemanticValueConfig = SemanticValueConfig(), num_p
 
 
 class SemanticMap:
-    """A float grid of semantic values on the exploration map's GridSpec."""
+    """A float grid of semantic values on the exploration map's GridSpec.
+
+    Args:
+        spec: the exploration map's grid.
+        config: the temperatures τ.
+        default: the value of unwritten cells (`indifferent_value` when None).
+    """
 
     def __init__(self, spec: GridSpec, config: SemanticValueConfig = SemanticValueConfig(),
                  default: float | None = None) -> None:
@@ -78,12 +102,20 @@ class SemanticMap:
             self._weighted_sum[window] += weights * value
 
     def mean(self) -> np.ndarray:
-        """The running weighted mean per cell (the default where nothing was written)."""
+        """The running weighted mean per cell (the default where nothing was written).
+
+        Returns:
+            The mean, one per cell.
+        """
         valued = self.weight > 0
         return np.where(valued, self._weighted_sum / np.where(valued, self.weight, 1.0), self.default)
 
     def values(self) -> np.ndarray:
-        """The map as planners read it: the mean, blended toward the default where weight is below 1."""
+        """The map as planners read it: the mean, blended toward the default where weight is below 1.
+
+        Returns:
+            The values, one per cell.
+        """
         confidence = np.minimum(self.weight, 1.0)
         return self.default + confidence * (self.mean() - self.default)
 

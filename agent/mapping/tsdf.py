@@ -52,7 +52,11 @@ class Voxels:
 
 
 class TsdfMap:
-    """Fuses depth frames into a TSDF and hands back the observed voxels as plain arrays."""
+    """Fuses depth frames into a TSDF and hands back the observed voxels as plain arrays.
+
+    Args:
+        config: the voxel size, truncation and depth range.
+    """
 
     def __init__(self, config: TsdfConfig = TsdfConfig()) -> None:
         self.config = config
@@ -68,7 +72,13 @@ class TsdfMap:
         )
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray) -> None:
-        """Fuse one linear depth image (metres, 0 = no return) seen from ``camera_to_world``."""
+        """Fuse one linear depth image (metres, 0 = no return) seen from ``camera_to_world``.
+
+        Args:
+            depth: the depth image.
+            intrinsics: the camera's intrinsics.
+            camera_to_world: the camera's world pose (4x4).
+        """
         image = o3d.t.geometry.Image(o3c.Tensor(np.ascontiguousarray(depth, dtype=np.float32)))
         k = o3c.Tensor(intrinsics.matrix(), dtype=o3c.float64)
         extrinsic = o3c.Tensor(np.linalg.inv(camera_to_world), dtype=o3c.float64)
@@ -79,7 +89,11 @@ class TsdfMap:
         self._grid.integrate(blocks, image, k, extrinsic, 1.0, cfg.depth_max, cfg.trunc_voxels)
 
     def voxels(self) -> Voxels:
-        """Every voxel that some depth ray has updated."""
+        """Every voxel that some depth ray has updated.
+
+        Returns:
+            Their indices, TSDF values and weights.
+        """
         coords, indices = self._grid.voxel_coordinates_and_flattened_indices()
         tsdf = self._grid.attribute("tsdf").reshape((-1,))[indices].numpy()
         weight = self._grid.attribute("weight").reshape((-1,))[indices].numpy()

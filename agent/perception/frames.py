@@ -46,6 +46,12 @@ def frame_labels(labels: Mapping[int, Any] | Iterable[Any]) -> dict[int, FrameLa
 
     Accepts the agent's `InstanceLabel`s (``id``, ``category``, ``colour``), the world's label dicts
     (``{"id", "category", "colour", ...}``) or a plain mapping of id to category string.
+
+    Args:
+        labels: the frame's labels, in any of those forms.
+
+    Returns:
+        The labels by segmentation id.
     """
     if isinstance(labels, Mapping):
         items = list(labels.items())
@@ -74,7 +80,17 @@ def _field(entry: Any, name: str, *default: Any) -> Any:
 
 def check_frame(depth: np.ndarray, segmentation: np.ndarray, intrinsics: Intrinsics,
                 camera_to_world: np.ndarray) -> None:
-    """Raise ValueError naming the field when the frame's parts disagree with each other."""
+    """Raise ValueError naming the field when the frame's parts disagree with each other.
+
+    Args:
+        depth: the depth image.
+        segmentation: the segmentation image.
+        intrinsics: the camera's intrinsics.
+        camera_to_world: the camera's world pose.
+
+    Raises:
+        ValueError: an image's shape differs from the intrinsics', or the pose is not a rigid 4x4.
+    """
     size = (intrinsics.height, intrinsics.width)
     if np.shape(depth) != size:
         raise ValueError(f"depth: shape {np.shape(depth)} but the intrinsics say {size}")
@@ -86,7 +102,15 @@ def check_frame(depth: np.ndarray, segmentation: np.ndarray, intrinsics: Intrins
 
 
 def check_labels(segmentation: np.ndarray, labels: Mapping[int, FrameLabel]) -> None:
-    """Raise ValueError when a segmentation id in the frame has no label."""
+    """Raise ValueError when a segmentation id in the frame has no label.
+
+    Args:
+        segmentation: the segmentation image.
+        labels: the labels by segmentation id.
+
+    Raises:
+        ValueError: naming the ids with no label.
+    """
     present = set(np.unique(segmentation[segmentation >= 0]).tolist())
     missing = sorted(present - set(labels))
     if missing:
@@ -107,6 +131,22 @@ def detect(
 
     Pixels farther than ``max_depth_m`` are dropped: depth noise grows with range, and a far, thin
     sliver of an object is more likely to smear into its neighbours' voxels than to help.
+
+    Args:
+        depth: the depth image (m; 0 = no return).
+        segmentation: the segmentation image (-1 = none).
+        labels: the labels by segmentation id.
+        intrinsics: the camera's intrinsics.
+        camera_to_world: the camera's world pose.
+        voxel_m: the voxel size.
+        min_pixels: the fewest returns an instance needs.
+        max_depth_m: the farthest return kept (all when None).
+
+    Returns:
+        The detections.
+
+    Raises:
+        ValueError: the frame's parts disagree, or an id has no label.
     """
     check_frame(depth, segmentation, intrinsics, camera_to_world)
     valid = (depth > 0) & (segmentation >= 0)

@@ -79,17 +79,41 @@ class RoomReading:
     def kind(self, region: int, ignoring: Collection[int] = ()) -> str | None:
         """The room kind a region shows, from its strongest cue other than the things ``ignoring``
         (the thing a question asks about is no cue for its own room: a tv says 'living room' but
-        may stand in a bedroom); None when nothing tells."""
+        may stand in a bedroom); None when nothing tells.
+
+        Args:
+            region: the region.
+            ignoring: instances whose cue does not count.
+
+        Returns:
+            The room kind, or None.
+        """
         return next((cue.kind for cue in self.cues.get(region, ()) if cue.instance not in ignoring), None)
 
     def room_of(self, instance: int, ignoring: Collection[int] = ()) -> str | None:
-        """The room kind the thing stands in, as far as the frame tells (`kind`)."""
+        """The room kind the thing stands in, as far as the frame tells (`kind`).
+
+        Args:
+            instance: the thing's segmentation id.
+            ignoring: instances whose cue does not count.
+
+        Returns:
+            The room kind, or None.
+        """
         region = self.region.get(instance)
         return None if region is None else self.kind(region, ignoring)
 
 
 def read_rooms(observation: Observation, config: RoomReadingConfig = RoomReadingConfig()) -> RoomReading:
-    """Read which room each instance of the frame stands in (see the module docstring)."""
+    """Read which room each instance of the frame stands in (see the module docstring).
+
+    Args:
+        observation: the frame.
+        config: how near a thing must be to stand on a floor.
+
+    Returns:
+        The reading.
+    """
     categories = {label.id: label.category for label in observation.labels}
     floors = frozenset(i for i, category in categories.items() if category == "floor")
     footing = _footing(observation, categories, config.contact_m)
@@ -112,7 +136,17 @@ def read_rooms(observation: Observation, config: RoomReadingConfig = RoomReading
 
 
 def floor_points(observation: Observation, reading: RoomReading, kind: str, max_depth_m: float) -> np.ndarray:
-    """Floor points (N, 2), up to ``max_depth_m`` away, of the frame's floors read as rooms of ``kind``."""
+    """Floor points (N, 2), up to ``max_depth_m`` away, of the frame's floors read as rooms of ``kind``.
+
+    Args:
+        observation: the frame.
+        reading: the frame's `read_rooms`.
+        kind: the room kind.
+        max_depth_m: the farthest floor point kept.
+
+    Returns:
+        The points (world x, y).
+    """
     ids = [floor for floor in reading.floors if reading.kind(floor) == kind]
     if not ids:
         return np.zeros((0, 2))
@@ -123,7 +157,16 @@ def floor_points(observation: Observation, reading: RoomReading, kind: str, max_
 
 
 def floor_points_by_kind(observation: Observation, reading: RoomReading, max_depth_m: float) -> dict[str, np.ndarray]:
-    """`floor_points` of every room kind ``reading`` (the frame's `read_rooms`) tells."""
+    """`floor_points` of every room kind ``reading`` (the frame's `read_rooms`) tells.
+
+    Args:
+        observation: the frame.
+        reading: the frame's `read_rooms`.
+        max_depth_m: the farthest floor point kept.
+
+    Returns:
+        The points by room kind.
+    """
     kinds = {kind for floor in reading.floors if (kind := reading.kind(floor)) is not None}
     return {kind: floor_points(observation, reading, kind, max_depth_m) for kind in sorted(kinds)}
 

@@ -73,7 +73,16 @@ class Sighting:
 
 def storage_centres(observation: Observation, kind: str, config: SightingConfig = SightingConfig()) -> list[Centre]:
     """Each instance this frame labels ``kind``, from its pixels with a depth return within
-    ``config.max_depth_m``, with the room the frame shows it in."""
+    ``config.max_depth_m``, with the room the frame shows it in.
+
+    Args:
+        observation: the frame.
+        kind: the storage category.
+        config: the farthest return used, and the pixels a centre needs.
+
+    Returns:
+        The centres.
+    """
     found = []
     reading = None
     for label in observation.labels:
@@ -91,7 +100,11 @@ def storage_centres(observation: Observation, kind: str, config: SightingConfig 
 
 
 class Sightings:
-    """Every piece seen so far, in the order first seen."""
+    """Every piece seen so far, in the order first seen.
+
+    Args:
+        config: how near a centre merges into a piece.
+    """
 
     def __init__(self, config: SightingConfig = SightingConfig()) -> None:
         self.config = config
@@ -99,7 +112,11 @@ class Sightings:
 
     def add(self, centres: Iterable[Centre]) -> None:
         """Merge a frame's centres (`storage_centres`): into the nearest piece within ``merge_m``,
-        as a pixel-weighted mean, else as a new piece; the room each was seen in is tallied."""
+        as a pixel-weighted mean, else as a new piece; the room each was seen in is tallied.
+
+        Args:
+            centres: a frame's centres.
+        """
         for centre in centres:
             xy = np.asarray(centre.xy, dtype=float)
             near = [(float(np.linalg.norm(p.xy - xy)), i) for i, p in enumerate(self.pieces)]

@@ -19,14 +19,35 @@ NEIGHBOURS = np.stack(np.meshgrid(*([np.arange(-1, 2)] * 3), indexing="ij"), axi
 
 
 def voxel_indices(points: np.ndarray, size: float) -> np.ndarray:
-    """Integer voxel coordinates (N, 3) of world points (N, 3) on a grid of ``size`` metres."""
+    """Integer voxel coordinates (N, 3) of world points (N, 3) on a grid of ``size`` metres.
+
+    Args:
+        points: the points.
+        size: the voxel size (m).
+
+    Returns:
+        The indices.
+
+    Raises:
+        ValueError: the size is not positive.
+    """
     if size <= 0:
         raise ValueError(f"voxel size: {size} must be positive")
     return np.floor(np.asarray(points, dtype=float).reshape(-1, 3) / size).astype(np.int64)
 
 
 def pack(indices: np.ndarray) -> np.ndarray:
-    """One int64 key per integer voxel (N, 3); coordinates must lie within ±2^20."""
+    """One int64 key per integer voxel (N, 3); coordinates must lie within ±2^20.
+
+    Args:
+        indices: the integer voxels.
+
+    Returns:
+        The keys (N,).
+
+    Raises:
+        ValueError: a coordinate lies outside ±2^20.
+    """
     idx = np.asarray(indices, dtype=np.int64).reshape(-1, 3) + _OFFSET
     if idx.size and (idx.min() < 0 or idx.max() > _MASK):
         raise ValueError(f"voxel indices: outside ±{_OFFSET} voxels, too far from the origin to pack")
@@ -34,24 +55,54 @@ def pack(indices: np.ndarray) -> np.ndarray:
 
 
 def unpack(keys: np.ndarray) -> np.ndarray:
-    """The integer voxel coordinates (N, 3) of packed keys (N,)."""
+    """The integer voxel coordinates (N, 3) of packed keys (N,).
+
+    Args:
+        keys: the keys.
+
+    Returns:
+        The coordinates.
+    """
     keys = np.asarray(keys, dtype=np.int64)
     return np.stack([(keys >> (2 * _BITS)) & _MASK, (keys >> _BITS) & _MASK, keys & _MASK], axis=1) - _OFFSET
 
 
 def keys_of(points: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
-    """Sorted unique keys of the voxels that hold ``points``, and how many points fell in each."""
+    """Sorted unique keys of the voxels that hold ``points``, and how many points fell in each.
+
+    Args:
+        points: the points (N, 3).
+        size: the voxel size (m).
+
+    Returns:
+        The keys and the counts.
+    """
     keys, counts = np.unique(pack(voxel_indices(points, size)), return_counts=True)
     return keys, counts.astype(np.int32)
 
 
 def centres(keys: np.ndarray, size: float) -> np.ndarray:
-    """World centres (N, 3) of packed voxels."""
+    """World centres (N, 3) of packed voxels.
+
+    Args:
+        keys: the keys.
+        size: the voxel size (m).
+
+    Returns:
+        The centres.
+    """
     return (unpack(keys) + 0.5) * size
 
 
 def dilate(keys: np.ndarray) -> np.ndarray:
-    """Sorted unique keys of every voxel within one step (26-neighbourhood) of ``keys``."""
+    """Sorted unique keys of every voxel within one step (26-neighbourhood) of ``keys``.
+
+    Args:
+        keys: the keys.
+
+    Returns:
+        The grown keys.
+    """
     if len(keys) == 0:
         return np.asarray(keys, dtype=np.int64)
     grown = unpack(keys)[None, :, :] + NEIGHBOURS[:, None, :]
@@ -63,6 +114,13 @@ def near_count(keys: np.ndarray, others: np.ndarray) -> int:
 
     Counting with a one-voxel tolerance makes two views of one surface agree even when depth noise
     or the grid puts the same patch of surface in neighbouring voxels.
+
+    Args:
+        keys: the voxels counted.
+        others: the voxels they are compared with (sorted).
+
+    Returns:
+        The count.
     """
     if len(keys) == 0 or len(others) == 0:
         return 0
@@ -73,7 +131,17 @@ def near_count(keys: np.ndarray, others: np.ndarray) -> int:
 
 def union(keys_a: np.ndarray, hits_a: np.ndarray, keys_b: np.ndarray, hits_b: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray]:
-    """Union of two voxel sets, summing the hit counts of voxels in both."""
+    """Union of two voxel sets, summing the hit counts of voxels in both.
+
+    Args:
+        keys_a: the first set's keys.
+        hits_a: its hit counts.
+        keys_b: the second set's keys.
+        hits_b: its hit counts.
+
+    Returns:
+        The union's keys and hit counts.
+    """
     keys, inverse = np.unique(np.concatenate([keys_a, keys_b]), return_inverse=True)
     hits = np.bincount(inverse, weights=np.concatenate([hits_a, hits_b]), minlength=len(keys))
     return keys, hits.astype(np.int32)

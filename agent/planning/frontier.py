@@ -31,7 +31,17 @@ class Frontier:
 
 def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
                    min_unexplored_neighbours: int = 2) -> np.ndarray:
-    """Reachable cells with at least that many 8-neighbours that are unexplored and not occupied."""
+    """Reachable cells with at least that many 8-neighbours that are unexplored and not occupied.
+
+    Args:
+        reachable: the cells the robot can reach.
+        explored: the cells seen.
+        occupied: the cells seen occupied.
+        min_unexplored_neighbours: the fewest open unknown neighbours a frontier cell has.
+
+    Returns:
+        A boolean grid of the frontier cells.
+    """
     open_unknown = (~explored & ~occupied).astype(np.int32)
     counts = ndimage.convolve(open_unknown, _EIGHT.astype(np.int32), mode="constant", cval=0) - open_unknown
     return reachable & (counts >= min_unexplored_neighbours)
@@ -39,7 +49,18 @@ def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.nda
 
 def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
                       min_size: int = 3) -> list[Frontier]:
-    """Group frontier cells into 8-connected clusters of at least ``min_size`` cells."""
+    """Group frontier cells into 8-connected clusters of at least ``min_size`` cells.
+
+    Args:
+        spec: the grid.
+        cells_mask: the frontier cells (`frontier_cells`).
+        explored: the cells seen.
+        occupied: the cells seen occupied.
+        min_size: the fewest cells a frontier has.
+
+    Returns:
+        The frontiers, each with its centre cell and its normal towards the unknown.
+    """
     labels, count = ndimage.label(cells_mask, structure=_EIGHT)
     open_unknown = ~explored & ~occupied
     frontiers = []

@@ -77,7 +77,16 @@ def choose_frontier(centres_xy: np.ndarray, distances_m: np.ndarray, log_weights
 
 def kept_goal(centres_xy: np.ndarray, goal_xy: np.ndarray | None, keep_within_m: float) -> int | None:
     """The candidate that is the earlier goal (the nearest to it, if within ``keep_within_m``), else
-    None: frontiers move as the map grows, so the goal is found again by place, not by identity."""
+    None: frontiers move as the map grows, so the goal is found again by place, not by identity.
+
+    Args:
+        centres_xy: the candidates' centres (N, 2).
+        goal_xy: the earlier goal, or None.
+        keep_within_m: how far a frontier may have moved and still be the goal.
+
+    Returns:
+        The candidate's index, or None.
+    """
     if goal_xy is None or len(centres_xy) == 0:
         return None
     gaps = np.hypot(*(np.asarray(centres_xy, dtype=float) - np.asarray(goal_xy, dtype=float)[None, :]).T)
@@ -94,14 +103,32 @@ def _fresh(distances: np.ndarray, log_weights: np.ndarray | None, distance_cost:
 
 
 def frontier_probabilities(log_weights: np.ndarray) -> np.ndarray:
-    """w / Σw computed from exponents, with the largest subtracted first so nothing overflows."""
+    """w / Σw computed from exponents, with the largest subtracted first so nothing overflows.
+
+    Args:
+        log_weights: log w per frontier.
+
+    Returns:
+        The probabilities.
+    """
     log_weights = np.asarray(log_weights, dtype=float)
     shifted = np.exp(log_weights - log_weights.max())
     return shifted / shifted.sum()
 
 
 def sample_frontier(log_weights: np.ndarray, rng: np.random.Generator) -> int:
-    """An index drawn ∝ exp(log_weights); raises ValueError when there is nothing to draw."""
+    """An index drawn ∝ exp(log_weights); raises ValueError when there is nothing to draw.
+
+    Args:
+        log_weights: log w per frontier.
+        rng: the draw's generator.
+
+    Returns:
+        The frontier's index.
+
+    Raises:
+        ValueError: no frontier.
+    """
     if len(log_weights) == 0:
         raise ValueError("no frontier to sample")
     probabilities = frontier_probabilities(log_weights)

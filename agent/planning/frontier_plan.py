@@ -85,7 +85,17 @@ def reachable_frontiers(world_map: ExplorationMap, robot_xy: tuple[float, float]
 
 def plan_move(candidates: Candidates, index: int, robot_xy: tuple[float, float],
               config: ExploreConfig = ExploreConfig()) -> MovePlan:
-    """A path toward frontier ``index``, cut to one step, ending with the heading of the frontier normal."""
+    """A path toward frontier ``index``, cut to one step, ending with the heading of the frontier normal.
+
+    Args:
+        candidates: the frontiers and the distance field from the robot.
+        index: the chosen frontier.
+        robot_xy: where the robot stands.
+        config: the step's length and the path's settings.
+
+    Returns:
+        The move.
+    """
     frontier = candidates.frontiers[index]
     robot_xy = np.asarray(robot_xy, dtype=float)
     field = candidates.field

@@ -20,7 +20,17 @@ class DistanceField:
     _mcp: MCP_Geometric
 
     def path_to(self, cell: tuple[int, int]) -> np.ndarray:
-        """The cells (K, 2) from the start to ``cell``; raises ValueError if it is unreachable."""
+        """The cells (K, 2) from the start to ``cell``; raises ValueError if it is unreachable.
+
+        Args:
+            cell: the goal cell (row, col).
+
+        Returns:
+            The path's cells.
+
+        Raises:
+            ValueError: the cell is unreachable.
+        """
         if not np.isfinite(self.metres[cell]):
             raise ValueError(f"cell {cell} is not reachable from {self.start}")
         return np.asarray(self._mcp.traceback(cell), dtype=int)
@@ -32,6 +42,15 @@ def distance_field(spec: GridSpec, traversable: np.ndarray, start: tuple[int, in
 
     ``cell_cost`` (≥ 1) weighs cells, e.g. to keep paths off walls; the field is then in weighted
     metres, which equal true metres along paths that stay clear.
+
+    Args:
+        spec: the grid.
+        traversable: the cells the robot may cross.
+        start: the robot's cell (row, col).
+        cell_cost: each cell's weight (1 everywhere when None).
+
+    Returns:
+        The field: metres from the start to every cell (inf where unreachable).
     """
     costs = np.where(traversable, 1.0 if cell_cost is None else cell_cost, np.inf)
     costs[start] = 1.0  # the robot stands there, whatever the map says
@@ -45,13 +64,30 @@ def clearance_cost(clearance_m: np.ndarray, radius_m: float, comfort_m: float, o
 
     1 where a cell is more than ``radius_m + comfort_m`` from the nearest obstacle, rising linearly
     to ``1 + obstacle_cost`` at ``radius_m``: a path hugs a wall only when nothing wider leads on.
+
+    Args:
+        clearance_m: each cell's distance to the nearest obstacle.
+        radius_m: the robot's radius.
+        comfort_m: the margin beyond it where paths pay nothing.
+        obstacle_cost: the extra cost at the radius.
+
+    Returns:
+        The costs.
     """
     margin = (clearance_m - radius_m) / comfort_m
     return 1.0 + obstacle_cost * np.clip(1.0 - margin, 0.0, 1.0)
 
 
 def truncate_path(points_xy: np.ndarray, max_length_m: float) -> np.ndarray:
-    """The prefix of a polyline whose length is at most ``max_length_m``, ending exactly there."""
+    """The prefix of a polyline whose length is at most ``max_length_m``, ending exactly there.
+
+    Args:
+        points_xy: the polyline (K, 2).
+        max_length_m: the most length kept.
+
+    Returns:
+        The prefix.
+    """
     if len(points_xy) < 2:
         return points_xy
     segments = np.diff(points_xy, axis=0)
@@ -72,6 +108,13 @@ def simplify_path(points_xy: np.ndarray, tolerance_m: float = 0.05) -> np.ndarra
 
     Each kept segment runs from the last kept point as far as every point it replaces stays within
     ``tolerance_m`` of it, so a bend made of small turns is kept rather than cut across.
+
+    Args:
+        points_xy: the path (K, 2).
+        tolerance_m: how far a dropped point may lie off the kept segment.
+
+    Returns:
+        The kept points, the first and last included.
     """
     if len(points_xy) < 3:
         return points_xy
@@ -95,4 +138,12 @@ def _max_offset(points_xy: np.ndarray) -> float:
 
 
 def path_length(points_xy: np.ndarray) -> float:
+    """The length of a polyline (K, 2) in metres; 0 for fewer than two points.
+
+    Args:
+        points_xy: the polyline.
+
+    Returns:
+        The length.
+    """
     return float(np.hypot(*np.diff(points_xy, axis=0).T).sum()) if len(points_xy) > 1 else 0.0

@@ -58,7 +58,19 @@ class PromptPoint:
 def visible_free_cells(world_map: ExplorationMap, robot_xy: tuple[float, float], depth: np.ndarray,
                        intrinsics: Intrinsics, camera_to_world: np.ndarray,
                        config: PromptPointConfig = PromptPointConfig()) -> tuple[np.ndarray, np.ndarray]:
-    """Candidate prompt points: world x, y (N, 2) and integer pixels (N, 2) as (u, v)."""
+    """Candidate prompt points: world x, y (N, 2) and integer pixels (N, 2) as (u, v).
+
+    Args:
+        world_map: the robot's map.
+        robot_xy: where the robot stands.
+        depth: the frame's depth image (the point must be nearer than what the pixel saw).
+        intrinsics: the camera's intrinsics.
+        camera_to_world: the camera's world pose.
+        config: the distances and floor height of prompt points.
+
+    Returns:
+        The points and their pixels.
+    """
     spec = world_map.spec
     xy = spec.to_world(np.argwhere(world_map.free))
     distance = np.hypot(xy[:, 0] - robot_xy[0], xy[:, 1] - robot_xy[1])
@@ -103,6 +115,15 @@ def farthest_point_sample(points_xy: np.ndarray, count: int, min_separation_m: f
     """Indices of up to ``count`` points, each the farthest from those before, all ≥ the separation apart.
 
     The first index is drawn uniformly with ``rng``; none is returned for no points.
+
+    Args:
+        points_xy: the points (N, 2).
+        count: the most indices returned.
+        min_separation_m: the least distance between two chosen points.
+        rng: the first index's generator.
+
+    Returns:
+        The indices.
     """
     if len(points_xy) == 0 or count <= 0:
         return np.zeros(0, dtype=int)
@@ -120,7 +141,20 @@ def farthest_point_sample(points_xy: np.ndarray, count: int, min_separation_m: f
 def prompt_points(world_map: ExplorationMap, robot_xy: tuple[float, float], depth: np.ndarray,
                   intrinsics: Intrinsics, camera_to_world: np.ndarray, rng: np.random.Generator,
                   config: PromptPointConfig = PromptPointConfig()) -> list[PromptPoint]:
-    """The points to letter on this frame, A first; empty when fewer than ``min_points`` remain."""
+    """The points to letter on this frame, A first; empty when fewer than ``min_points`` remain.
+
+    Args:
+        world_map: the robot's map.
+        robot_xy: where the robot stands.
+        depth: the frame's depth image.
+        intrinsics: the camera's intrinsics.
+        camera_to_world: the camera's world pose.
+        rng: the sampling's generator.
+        config: how many points, how far apart and how far away.
+
+    Returns:
+        The prompt points, lettered.
+    """
     xy, pixels = visible_free_cells(world_map, robot_xy, depth, intrinsics, camera_to_world, config)
     chosen = farthest_point_sample(xy, config.max_points, config.merge_distance_m, rng)
     if len(chosen) < config.min_points:

@@ -38,21 +38,49 @@ class Routes:
     robot_radius: float
 
     def reaches(self, xy: np.ndarray) -> bool:
-        """Whether the base can drive to ``xy`` over the map and stand there clear of obstacles."""
+        """Whether the base can drive to ``xy`` over the map and stand there clear of obstacles.
+
+        Args:
+            xy: the point (world).
+
+        Returns:
+            Whether it can.
+        """
         cell = self._cell(xy)
         return cell is not None and bool(np.isfinite(self.field.metres[cell])) and self._clear(cell)
 
     def standable(self) -> np.ndarray:
-        """Every cell `reaches` holds for, as a boolean grid."""
+        """Every cell `reaches` holds for, as a boolean grid.
+
+        Returns:
+            The grid.
+        """
         return np.isfinite(self.field.metres) & (self.clearance >= self.robot_radius + STAND_MARGIN_M)
 
     def unblocked(self, xy: np.ndarray) -> bool:
-        """Whether the map knows of no obstacle in the way of the base standing at ``xy``."""
+        """Whether the map knows of no obstacle in the way of the base standing at ``xy``.
+
+        Args:
+            xy: the point (world).
+
+        Returns:
+            Whether nothing blocks it.
+        """
         cell = self._cell(xy)
         return cell is not None and self._clear(cell)
 
     def to(self, xy: np.ndarray) -> np.ndarray:
-        """Waypoints (K, 2) from the start to exactly ``xy``; raises ValueError if it is out of reach."""
+        """Waypoints (K, 2) from the start to exactly ``xy``; raises ValueError if it is out of reach.
+
+        Args:
+            xy: the goal (world).
+
+        Returns:
+            The waypoints, simplified.
+
+        Raises:
+            ValueError: the goal is out of reach.
+        """
         goal = np.asarray(xy, dtype=float)[:2]
         if not self.reaches(goal):
             raise ValueError(f"({goal[0]:.2f}, {goal[1]:.2f}) cannot be reached on the map")
@@ -93,7 +121,20 @@ def routes_from(world_map: ExplorationMap, start_xy: np.ndarray, config: Explore
 def step_towards(routes: Routes, goal_xy: np.ndarray, yaw: float | None, max_step_m: float) -> tuple[MovePlan, bool]:
     """One step's move along the path to ``goal_xy``, cut to ``max_step_m``, and whether it ends
     there. Arriving, the robot turns to ``yaw``; cut short (or with no ``yaw``), it faces the way
-    it was going. Raises ValueError when the goal is out of reach."""
+    it was going. Raises ValueError when the goal is out of reach.
+
+    Args:
+        routes: the routes from where the robot stands.
+        goal_xy: the goal (world).
+        yaw: the heading to arrive with, or None.
+        max_step_m: the longest step.
+
+    Returns:
+        The move, and whether it arrives.
+
+    Raises:
+        ValueError: the goal is out of reach.
+    """
     full = routes.to(goal_xy)
     path = truncate_path(full, max_step_m)
     arrives = len(path) == len(full) and bool(np.allclose(path[-1], full[-1]))

@@ -29,7 +29,16 @@ class FrontierWeightConfig:
 
 
 def normal_ray_cells(spec: GridSpec, frontier: Frontier, d_sv_m: float) -> np.ndarray:
-    """Cells (K, 2) one resolution apart along the normal, from one step out to ``d_sv_m``, in the grid."""
+    """Cells (K, 2) one resolution apart along the normal, from one step out to ``d_sv_m``, in the grid.
+
+    Args:
+        spec: the grid.
+        frontier: the frontier (its centre and normal).
+        d_sv_m: the ray's length.
+
+    Returns:
+        The cells.
+    """
     steps = np.arange(1, int(round(d_sv_m / spec.resolution)) + 1) * spec.resolution
     points = spec.to_world(np.asarray(frontier.centre)) + steps[:, None] * np.asarray(frontier.normal)[None, :]
     cells = spec.to_cell(points)
@@ -43,6 +52,16 @@ def frontier_log_weights(frontiers: Sequence[Frontier], values: np.ndarray, spec
 
     Weights are returned as exponents because with larger temperatures exp() overflows; a ray that
     leaves the grid at once reads ``default`` (pass the semantic map's).
+
+    Args:
+        frontiers: the frontiers.
+        values: the semantic values per cell.
+        spec: the grid.
+        config: the temperatures τ and the ray's length.
+        default: the value read for a ray with no cell on the grid.
+
+    Returns:
+        log w per frontier.
     """
     logs = np.zeros(len(frontiers))
     for i, frontier in enumerate(frontiers):

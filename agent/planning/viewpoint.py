@@ -62,7 +62,18 @@ class Viewpoint:
 def in_plain_view(occupied: np.ndarray, spec: GridSpec, eye_xy: np.ndarray, piece_xy: np.ndarray,
                   own_m: float) -> bool:
     """Whether no occupied cell lies on the segment from ``eye_xy`` to ``piece_xy``, except within
-    ``own_m`` of the piece (the piece itself). Cells off the map block nothing."""
+    ``own_m`` of the piece (the piece itself). Cells off the map block nothing.
+
+    Args:
+        occupied: the cells seen occupied.
+        spec: the grid.
+        eye_xy: where the robot would look from.
+        piece_xy: the piece looked at.
+        own_m: how far round the piece its own cells are.
+
+    Returns:
+        Whether the view is clear.
+    """
     eye, piece = np.asarray(eye_xy, dtype=float), np.asarray(piece_xy, dtype=float)
     length = float(np.linalg.norm(piece - eye)) - own_m
     if length <= 0:
@@ -82,7 +93,18 @@ def choose_viewpoint(routes: Routes, occupied: np.ndarray, piece_xy: np.ndarray,
                      config: ViewpointConfig = ViewpointConfig()) -> Viewpoint | None:
     """The viewpoint of the piece at ``piece_xy`` with the shortest path, at the first of
     ``config.distances_m`` that has one, none within ``config.apart_rad`` of a bearing in ``tried``;
-    None when no place round it is both reachable and in plain view."""
+    None when no place round it is both reachable and in plain view.
+
+    Args:
+        routes: the routes from where the robot stands.
+        occupied: the cells seen occupied.
+        piece_xy: the piece to look at.
+        tried: the bearings already looked from (rad).
+        config: the distances, bearings and spacing tried.
+
+    Returns:
+        The viewpoint, or None.
+    """
     piece = np.asarray(piece_xy, dtype=float)[:2]
     spec = routes.field.spec
     for distance in config.distances_m:

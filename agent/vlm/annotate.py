@@ -14,7 +14,15 @@ _DISC_SHARE = 0.035  # disc radius as a share of the image's longer side
 
 
 def draw_marks(rgb: np.ndarray, marks: dict[str, tuple[float, float]]) -> np.ndarray:
-    """A copy of the HxWx3 uint8 ``rgb`` with each letter drawn centred at its (u, v) pixel."""
+    """A copy of the HxWx3 uint8 ``rgb`` with each letter drawn centred at its (u, v) pixel.
+
+    Args:
+        rgb: the image.
+        marks: each letter's pixel (u, v).
+
+    Returns:
+        The marked copy.
+    """
     if not marks:
         return rgb.copy()
     image = Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8))

@@ -22,7 +22,17 @@ FACTORIES: dict[str, Callable[[VLMSettings], VisionLanguageModel]] = {
 
 
 def make_vlm(settings: VLMSettings) -> VisionLanguageModel:
-    """The backend named by ``settings.backend``; a `VLMError` names the known ones otherwise."""
+    """The backend named by ``settings.backend``; a `VLMError` names the known ones otherwise.
+
+    Args:
+        settings: the VLM's settings.
+
+    Returns:
+        The backend.
+
+    Raises:
+        VLMError: an unknown backend.
+    """
     factory = FACTORIES.get(settings.backend)
     if factory is None:
         raise VLMError(f"unknown VLM backend {settings.backend!r} (known: {', '.join(FACTORIES)})")

@@ -81,7 +81,14 @@ ROOM_CUE_MIN = 0.85
 
 def room_named_by(category: str) -> tuple[str, float] | None:
     """The room kind a piece of furniture or a fixture of ``category`` says a view shows, with its
-    affinity; None for a weak cue and for small things, which are carried from room to room."""
+    affinity; None for a weak cue and for small things, which are carried from room to room.
+
+    Args:
+        category: the thing's category.
+
+    Returns:
+        The room kind and affinity, or None.
+    """
     if category not in FURNITURE:
         return None
     rooms = ROOM_AFFINITY.get(category, {})
@@ -90,7 +97,15 @@ def room_named_by(category: str) -> tuple[str, float] | None:
 
 
 def affinity(category: str | None, room_name: str) -> float:
-    """How likely a thing of ``category`` is to be found in a room of this name's type."""
+    """How likely a thing of ``category`` is to be found in a room of this name's type.
+
+    Args:
+        category: the thing's category, or None (`UNLISTED`).
+        room_name: the room's name (its type is read from it).
+
+    Returns:
+        The affinity.
+    """
     if category is None:
         return UNLISTED
     return ROOM_AFFINITY.get(category, {}).get(room_kind(room_name), UNLISTED)
@@ -99,5 +114,13 @@ def affinity(category: str | None, room_name: str) -> float:
 def room_cue(categories: Iterable[str], room_name: str) -> float:
     """How strongly things of these categories, seen together, suggest a room of this name's type:
     the strongest single cue (a toilet is enough for a bathroom). `UNLISTED` with nothing in view.
-    Only the type shows: a second bedroom looks like a bedroom."""
+    Only the type shows: a second bedroom looks like a bedroom.
+
+    Args:
+        categories: the categories in view.
+        room_name: the room's name.
+
+    Returns:
+        The cue's strength.
+    """
     return max((affinity(category, room_name) for category in categories), default=UNLISTED)

@@ -28,7 +28,14 @@ log = logging.getLogger(__name__)
 
 
 class HuggingFaceVLM:
-    """A `VisionLanguageModel` scored from a local image-text-to-text model's next-token logits."""
+    """A `VisionLanguageModel` scored from a local image-text-to-text model's next-token logits.
+
+    Args:
+        settings: the model's folder and the device.
+
+    Raises:
+        VLMError: transformers is not installed, or the folder, device or model cannot be used.
+    """
 
     name = "hf"
 
@@ -54,6 +61,14 @@ class HuggingFaceVLM:
         log.info("hf VLM: %s from %s on %s", type(self.model).__name__, self.path, self.device)
 
     def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        """P(candidate) from the model's next-token logits, each candidate's tokens pooled (log-sum-exp).
+
+        Args:
+            query: the image, the prompt and the candidates.
+
+        Returns:
+            The probabilities, summing to 1.
+        """
         ids = [self._candidate_token_ids(c) for c in query.candidates]
         _check_distinct(query.candidates, ids)
         logits = self._next_token_logits(query)

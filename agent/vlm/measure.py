@@ -75,7 +75,15 @@ class Report:
 
 
 def ask(vlm: VisionLanguageModel, case: Case) -> Reply:
-    """The answer and relevance prompts of Explore until Confident, on the case's frame."""
+    """The answer and relevance prompts of Explore until Confident, on the case's frame.
+
+    Args:
+        vlm: the model.
+        case: the frame and its question.
+
+    Returns:
+        The answer probabilities and the relevance.
+    """
     choices = list(case.choices)
     probabilities = vlm.probabilities(VisualQuery(case.observation, answer_prompt(case.question, choices), LETTERS))
     relevance = vlm.probabilities(VisualQuery(case.observation, relevance_prompt(case.question), YES_NO))["Yes"]
@@ -84,7 +92,16 @@ def ask(vlm: VisionLanguageModel, case: Case) -> Reply:
 
 def measure(vlm: VisionLanguageModel, cases: Sequence[Case], min_share: float = 0.02) -> Report:
     """Ask ``vlm`` about every case and measure the properties (module docstring). A property with
-    no case to rest on is NaN."""
+    no case to rest on is NaN.
+
+    Args:
+        vlm: the model.
+        cases: the frames and their questions.
+        min_share: the least share of the image the target fills to count as in view.
+
+    Returns:
+        The report.
+    """
     replies = [ask(vlm, case) for case in cases]
     right = np.array([reply.argmax == case.answer for case, reply in zip(cases, replies)])
     in_view = np.array([case.target_share >= min_share for case in cases])
@@ -121,7 +138,15 @@ class RoomJudgement:
 
 def room_judgement(vlm: SimulatedVLM, cases: Sequence[Case]) -> RoomJudgement:
     """Compare the room kind the simulator takes each floor in view for, asked each case's
-    question, with the floor's true kind."""
+    question, with the floor's true kind.
+
+    Args:
+        vlm: the simulated model.
+        cases: the frames and their questions.
+
+    Returns:
+        How many floors were judged, and how many wrongly.
+    """
     floors = judged = wrong = 0
     for case in cases:
         taken = vlm.rooms_taken(case.observation, case.question)
@@ -134,7 +159,15 @@ def room_judgement(vlm: SimulatedVLM, cases: Sequence[Case]) -> RoomJudgement:
 
 
 def normalised_entropy(probabilities: dict[str, float], choices: Sequence[str]) -> float:
-    """H(f̂) / ln(number of real choices): 1 for a uniform answer over them, 0 for a certain one."""
+    """H(f̂) / ln(number of real choices): 1 for a uniform answer over them, 0 for a certain one.
+
+    Args:
+        probabilities: f̂ per letter.
+        choices: the choices (padding is not a real choice).
+
+    Returns:
+        The normalised entropy.
+    """
     real = [LETTERS[i] for i, choice in enumerate(choices) if choice != PAD_CHOICE]
     p = np.array([probabilities[letter] for letter in real])
     p = p / p.sum()
@@ -144,7 +177,15 @@ def normalised_entropy(probabilities: dict[str, float], choices: Sequence[str]) 
 
 def roc_auc(scores: ArrayLike, positive: ArrayLike) -> float:
     """P(score of a random positive > score of a random negative), ties counted half (the
-    Mann-Whitney U statistic over n_pos·n_neg); NaN without both kinds."""
+    Mann-Whitney U statistic over n_pos·n_neg); NaN without both kinds.
+
+    Args:
+        scores: the scores.
+        positive: which are positive.
+
+    Returns:
+        The AUC, or NaN.
+    """
     scores, positive = np.asarray(scores, dtype=float), np.asarray(positive, dtype=bool)
     pos, neg = scores[positive], scores[~positive]
     if pos.size == 0 or neg.size == 0:

@@ -33,7 +33,17 @@ def _pad_rows(array: np.ndarray, height: int, fill: float) -> np.ndarray:
 
 
 def side_by_side(views: Sequence[Observation]) -> Observation:
-    """One observation showing ``views`` left to right; a single view is returned as it is."""
+    """One observation showing ``views`` left to right; a single view is returned as it is.
+
+    Args:
+        views: the views.
+
+    Returns:
+        The observation.
+
+    Raises:
+        ValueError: no view.
+    """
     if not views:
         raise ValueError("views: at least one view is needed")
     if len(views) == 1:

@@ -40,7 +40,14 @@ _BODY_EXCERPT = 300
 
 
 class OpenAIVLM:
-    """A `VisionLanguageModel` served over the OpenAI chat-completions API."""
+    """A `VisionLanguageModel` served over the OpenAI chat-completions API.
+
+    Args:
+        settings: the server, the model and the API key's variable.
+
+    Raises:
+        VLMError: no model name is set.
+    """
 
     name = "openai"
 
@@ -55,6 +62,14 @@ class OpenAIVLM:
         self._api_key = os.environ.get(settings.api_key_env) or os.environ.get("OPENAI_API_KEY")
 
     def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        """P(candidate) from the top log-probabilities of the server's first answer token.
+
+        Args:
+            query: the image, the prompt and the candidates.
+
+        Returns:
+            The probabilities, summing to 1.
+        """
         reply = self._post(self._request_body(query))
         return candidate_probabilities(self._top_logprobs(reply), query.candidates)
 
@@ -139,6 +154,13 @@ def candidate_probabilities(top_logprobs: list[tuple[str, float]], candidates: t
     spell "A" after a colon), it equals the candidate, or failing that equals it ignoring case.
     Tokens for the same candidate add up. Missing candidates get half the smallest returned
     probability.
+
+    Args:
+        top_logprobs: the token's alternatives and their log-probabilities.
+        candidates: the answers asked for.
+
+    Returns:
+        The probabilities, summing to 1.
     """
     exact = {c: c for c in candidates}
     folded = {c.lower(): c for c in candidates}
@@ -160,7 +182,14 @@ def candidate_probabilities(top_logprobs: list[tuple[str, float]], candidates: t
 
 
 def png_data_url(rgb: np.ndarray) -> str:
-    """The image as a ``data:image/png;base64,...`` URL: lossless, so the drawn letters stay crisp."""
+    """The image as a ``data:image/png;base64,...`` URL: lossless, so the drawn letters stay crisp.
+
+    Args:
+        rgb: the image (HxWx3, uint8).
+
+    Returns:
+        The URL.
+    """
     buffer = io.BytesIO()
     Image.fromarray(rgb).save(buffer, format="PNG")
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")

@@ -27,11 +27,27 @@ class VisionLanguageModel(Protocol):
     name: str
 
     def probabilities(self, query: VisualQuery) -> dict[str, float]:
-        """P(candidate) for each candidate, summing to 1."""
+        """P(candidate) for each candidate, summing to 1.
+
+        Args:
+            query: the image, the prompt and the candidates.
+
+        Returns:
+            The probabilities.
+        """
         ...
 
 
 def softmax(candidates: tuple[str, ...], logits: np.ndarray) -> dict[str, float]:
+    """Probabilities of ``candidates`` from their logits, the largest subtracted first so nothing overflows.
+
+    Args:
+        candidates: the candidates.
+        logits: their logits.
+
+    Returns:
+        P per candidate.
+    """
     shifted = np.exp(logits - np.max(logits))
     probs = shifted / shifted.sum()
     return {c: float(p) for c, p in zip(candidates, probs)}

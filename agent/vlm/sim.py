@@ -49,7 +49,11 @@ __all__ = ["SimParams", "SimulatedVLM"]
 
 
 class SimulatedVLM:
-    """A `VisionLanguageModel` grounded only in the frame it is shown."""
+    """A `VisionLanguageModel` grounded only in the frame it is shown.
+
+    Args:
+        params: how well it notices, judges rooms and answers.
+    """
 
     name = "sim"
 
@@ -57,6 +61,14 @@ class SimulatedVLM:
         self.params = params
 
     def probabilities(self, query: VisualQuery) -> dict[str, float]:
+        """P(candidate) as the simulated model answers: from what the frame shows about the question.
+
+        Args:
+            query: the image, the prompt and the candidates.
+
+        Returns:
+            The probabilities, summing to 1.
+        """
         kind = prompt_kind(query.prompt)
         rng = self._generator(query.observation, query.prompt)
         if kind == "answer":
@@ -75,7 +87,15 @@ class SimulatedVLM:
     def rooms_taken(self, observation: Observation, question: str) -> dict[int, str | None]:
         """The room kind the model takes each floor in view for, asked about ``question`` (None
         where nothing in view names it): what every prompt about that question on this frame
-        answers from. For measuring how it judges rooms (`agent.vlm.measure.room_judgement`)."""
+        answers from. For measuring how it judges rooms (`agent.vlm.measure.room_judgement`).
+
+        Args:
+            observation: the frame.
+            question: the question.
+
+        Returns:
+            The room kind (or None) by floor instance.
+        """
         take, _ = self._take(observation, question)
         return {floor: take.region_kind(floor) for floor in take.rooms.floors}
 

@@ -28,7 +28,17 @@ SEEN_PX = 20
 def view_value(take: FrameTake, question: ParsedQuestion | None, mark: tuple[float, float] | None,
                window: float) -> float:
     """The value in [0, 1] of the whole view (``mark`` None) or of the square of half-size
-    ``window`` (a share of the image width) around the pixel ``mark``."""
+    ``window`` (a share of the image width) around the pixel ``mark``.
+
+    Args:
+        take: what the model makes of the frame.
+        question: the question, or None when it was not understood.
+        mark: the pixel (u, v), or None for the whole view.
+        window: the square's half-size.
+
+    Returns:
+        The value.
+    """
     seg = take.observation.segmentation
     if mark is not None:
         half = max(1, int(window * seg.shape[1]))

@@ -44,7 +44,16 @@ NONE = Evidence()
 
 
 def evidence(take: FrameTake, question: ParsedQuestion, rng: np.random.Generator) -> Evidence:
-    """What the frame says about the question (see the module docstring)."""
+    """What the frame says about the question (see the module docstring).
+
+    Args:
+        take: what the model makes of the frame.
+        question: the parsed question.
+        rng: the draws' generator.
+
+    Returns:
+        The evidence.
+    """
     asks = question.template.asks
     if asks in ("power", "door"):
         return _state(take, question)

@@ -33,7 +33,13 @@ class Seen:
 class FrameTake:
     """One frame as the model takes it in for one question: `seen` lists every labelled instance,
     `noticed` draws which of some of them the model notices, `room_of` says which room kind it
-    takes a thing to stand in (None when nothing in view tells)."""
+    takes a thing to stand in (None when nothing in view tells).
+
+    Args:
+        observation: the frame.
+        params: the simulated model's parameters.
+        rng: the draws' generator (the misjudged rooms are drawn here).
+    """
 
     def __init__(self, observation: Observation, params: SimParams, rng: np.random.Generator) -> None:
         self.observation = observation
@@ -50,7 +56,14 @@ class FrameTake:
     def noticed(self, fits: Callable[[InstanceLabel], bool]) -> list[Seen]:
         """The instances that fit which the model notices: each with probability ``skill`` times
         a size term (1 − exp(−area/notice_area_px)) times a distance term (exp(−max(0, d −
-        notice_near_m)/notice_distance_m)). One draw per instance in the frame, fitting or not."""
+        notice_near_m)/notice_distance_m)). One draw per instance in the frame, fitting or not.
+
+        Args:
+            fits: which instances count.
+
+        Returns:
+            The noticed instances.
+        """
         p = self.params
         kept = []
         for seen in self.seen:
@@ -63,24 +76,51 @@ class FrameTake:
 
     def region_kind(self, region: int, ignoring: Collection[int] = ()) -> str | None:
         """The room kind the model takes a region for: what its cues say (`RoomReading.kind`),
-        replaced by another kind when this region is one it misjudges (``room_error``)."""
+        replaced by another kind when this region is one it misjudges (``room_error``).
+
+        Args:
+            region: the region.
+            ignoring: instances whose cue does not count.
+
+        Returns:
+            The room kind, or None.
+        """
         kind = self.rooms.kind(region, ignoring)
         if kind is None or region not in self._misjudged:
             return kind
         return ROOM_TYPES[(ROOM_TYPES.index(kind) + self._misjudged[region]) % len(ROOM_TYPES)]
 
     def room_of(self, instance: int, ignoring: Collection[int] = ()) -> str | None:
-        """The room kind the model takes the thing to stand in (`region_kind` of its region)."""
+        """The room kind the model takes the thing to stand in (`region_kind` of its region).
+
+        Args:
+            instance: the thing's segmentation id.
+            ignoring: instances whose cue does not count.
+
+        Returns:
+            The room kind, or None.
+        """
         region = self.rooms.region.get(instance)
         return None if region is None else self.region_kind(region, ignoring)
 
     def room_share(self, kind: str) -> float:
-        """The share of the image filled by the parts the model takes for a room of ``kind``."""
+        """The share of the image filled by the parts the model takes for a room of ``kind``.
+
+        Args:
+            kind: the room kind.
+
+        Returns:
+            The share (0 to 1).
+        """
         ids = [instance for instance in self.rooms.region if self.room_of(instance) == kind]
         return float(np.isin(self.observation.segmentation, ids).mean()) if ids else 0.0
 
     def floor_at_feet(self) -> int | None:
-        """The floor instance filling the bottom middle of the image: where the robot stands."""
+        """The floor instance filling the bottom middle of the image: where the robot stands.
+
+        Returns:
+            The floor's segmentation id, or None.
+        """
         height, width = self.observation.segmentation.shape
         patch = self.observation.segmentation[int(height * 0.85):, width // 3: 2 * width // 3].ravel().tolist()
         under = [i for i in patch if i in self.rooms.floors]

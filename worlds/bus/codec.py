@@ -59,7 +59,18 @@ class Message:
 
 
 def encode(meta: dict[str, Any], arrays: dict[str, np.ndarray] | None = None) -> bytes:
-    """Pack ``meta`` and ``arrays`` into one message. Raises WireError on unsupported arrays."""
+    """Pack ``meta`` and ``arrays`` into one message. Raises WireError on unsupported arrays.
+
+    Args:
+        meta: the metadata (JSON-able; ``arrays`` is reserved).
+        arrays: the arrays by name.
+
+    Returns:
+        The message's bytes.
+
+    Raises:
+        WireError: a reserved key or an unsupported array.
+    """
     if "arrays" in meta:
         raise WireError("meta: the key 'arrays' is reserved for the array table")
     table = []
@@ -76,7 +87,18 @@ def encode(meta: dict[str, Any], arrays: dict[str, np.ndarray] | None = None) ->
 
 
 def decode(data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Message:
-    """Parse and validate a message. Raises WireError naming the first thing that is wrong."""
+    """Parse and validate a message. Raises WireError naming the first thing that is wrong.
+
+    Args:
+        data: the message's bytes.
+        limits: the largest header, arrays and message accepted.
+
+    Returns:
+        The message.
+
+    Raises:
+        WireError: naming the first thing that is wrong.
+    """
     view = memoryview(data)
     if len(view) < _PREFIX.size:
         raise WireError(f"message: truncated, {len(view)} bytes is shorter than the {_PREFIX.size}-byte prefix")

@@ -19,7 +19,17 @@ from dataclasses import dataclass
 _NAMESPACE = re.compile(r"^[A-Za-z0-9_\-]+(/[A-Za-z0-9_\-]+)*$")
 
 def check_namespace(namespace: str) -> str:
-    """Return ``namespace`` if it is a plain key prefix (no wildcards, no empty chunks)."""
+    """Return ``namespace`` if it is a plain key prefix (no wildcards, no empty chunks).
+
+    Args:
+        namespace: the namespace.
+
+    Returns:
+        The namespace.
+
+    Raises:
+        ValueError: it is not a plain key prefix.
+    """
     if not _NAMESPACE.match(namespace):
         raise ValueError(
             f"namespace: {namespace!r} must be chunks of letters, digits, '_' or '-' joined by '/'"
@@ -37,6 +47,14 @@ class Keys:
         check_namespace(self.namespace)
 
     def world_cmd(self, verb: str) -> str:
+        """The key the world answers the command ``verb`` on.
+
+        Args:
+            verb: the command's name.
+
+        Returns:
+            The key.
+        """
         return f"{self.namespace}/world/cmd/{verb}"
 
     @property

@@ -13,7 +13,13 @@ from worlds.bus.rpc import Arrays, PendingReply
 
 
 class WorldLink:
-    """Sends world commands; any query fails at once with a reason when the world's token goes."""
+    """Sends world commands; any query fails at once with a reason when the world's token goes.
+
+    Args:
+        session: the bus session.
+        keys: the namespace's keys.
+        timeout_s: how long a reply may take by default.
+    """
 
     def __init__(self, session: zenoh.Session, keys: Keys, timeout_s: float = 10.0) -> None:
         self.session = session
@@ -23,17 +29,48 @@ class WorldLink:
 
     def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
                 arrays: Arrays | None = None) -> PendingReply:
-        """Send the command ``verb`` (with ``arrays``, e.g. an arm trajectory's samples); poll the reply."""
+        """Send the command ``verb`` (with ``arrays``, e.g. an arm trajectory's samples); poll the reply.
+
+        Args:
+            verb: the command's name.
+            meta: its metadata.
+            timeout_s: how long the reply may take (the link's default when None).
+            arrays: its arrays.
+
+        Returns:
+            The pending reply.
+        """
         return PendingReply(self.session, self.keys.world_cmd(verb), meta, arrays,
                             timeout_s or self.timeout_s, self.liveness.gone)
 
     def describe(self, timeout_s: float | None = None) -> PendingReply:
-        """Ask for the robot's description (URDF, cameras, arm joints and limits)."""
+        """Ask for the robot's description (URDF, cameras, arm joints and limits).
+
+        Args:
+            timeout_s: how long the reply may take (the link's default when None).
+
+        Returns:
+            The pending reply.
+        """
         return PendingReply(self.session, self.keys.world_description, {}, None,
                             timeout_s or self.timeout_s, self.liveness.gone)
 
     def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
              arrays: Arrays | None = None) -> Message:
+        """Send the command ``verb`` and wait for its reply (for tools and tests, never inside a tree tick).
+
+        Args:
+            verb: the command's name.
+            meta: its metadata.
+            timeout_s: how long the reply may take (the link's default when None).
+            arrays: its arrays.
+
+        Returns:
+            The reply.
+
+        Raises:
+            QueryFailed: no reply came, or the world is gone.
+        """
         return self.request(verb, meta, timeout_s, arrays).wait()
 
     def close(self) -> None:

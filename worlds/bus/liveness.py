@@ -9,7 +9,12 @@ import zenoh
 
 
 class LivenessWatch:
-    """Follows one liveliness token; `gone` gives a reason once the token has been seen and lost."""
+    """Follows one liveliness token; `gone` gives a reason once the token has been seen and lost.
+
+    Args:
+        session: the bus session.
+        key: the token's key.
+    """
 
     def __init__(self, session: zenoh.Session, key: str) -> None:
         self.key = key
@@ -31,13 +36,25 @@ class LivenessWatch:
             return self._alive
 
     def gone(self) -> str | None:
+        """Why the world is gone, once its liveliness token has been dropped; None while it is there.
+
+        Returns:
+            The reason, or None.
+        """
         with self._lock:
             if self._lost_at is None:
                 return None
         return f"the world process is gone (its liveliness token {self.key} was dropped)"
 
     def wait_alive(self, timeout_s: float) -> bool:
-        """Wait until the token is present, at most ``timeout_s``."""
+        """Wait until the token is present, at most ``timeout_s``.
+
+        Args:
+            timeout_s: how long to wait.
+
+        Returns:
+            Whether the token is present.
+        """
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             if self.alive:

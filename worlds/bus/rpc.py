@@ -38,6 +38,10 @@ class CommandServer:
 
     Handlers run in the serving thread rather than Zenoh's callback threads, so a simulator that is
     not thread-safe (PyBullet) is only ever touched from one thread.
+
+    Args:
+        session: the bus session.
+        limits: the largest request accepted.
     """
 
     def __init__(self, session: zenoh.Session, limits: Limits = DEFAULT_LIMITS) -> None:
@@ -46,16 +50,31 @@ class CommandServer:
         self._queryables: list[tuple[Any, Handler]] = []
 
     def add(self, key: str, handler: Handler) -> None:
+        """Answer queries on ``key`` with ``handler``.
+
+        Args:
+            key: the key expression.
+            handler: makes the reply from the query's message.
+        """
         self._queryables.append((self._session.declare_queryable(key), handler))
 
     def serve(self, stop: threading.Event, idle_sleep_s: float = 0.001) -> None:
-        """Answer queries until ``stop`` is set."""
+        """Answer queries until ``stop`` is set.
+
+        Args:
+            stop: set to stop serving.
+            idle_sleep_s: how long to sleep when no query waits.
+        """
         while not stop.is_set():
             if not self.serve_pending():
                 time.sleep(idle_sleep_s)
 
     def serve_pending(self) -> bool:
-        """Answer every query waiting now; return whether there was any."""
+        """Answer every query waiting now; return whether there was any.
+
+        Returns:
+            Whether any query was answered.
+        """
         served = False
         for queryable, handler in self._queryables:
             query = queryable.try_recv()
@@ -90,6 +109,15 @@ class PendingReply:
 
     ``gone`` is asked on every poll; when it returns a reason (the server's liveliness token went),
     the query fails with that reason at once instead of waiting for its deadline.
+
+    Args:
+        session: the bus session.
+        key: the command's key.
+        meta: its metadata.
+        arrays: its arrays.
+        timeout_s: how long the reply may take.
+        gone: says why the server is gone, if it is.
+        limits: the largest reply accepted.
     """
 
     def __init__(
@@ -114,7 +142,14 @@ class PendingReply:
         return time.monotonic() - self._started
 
     def poll(self) -> Message | None:
-        """The reply if it has come, None while waiting; raises QueryFailed when there will be none."""
+        """The reply if it has come, None while waiting; raises QueryFailed when there will be none.
+
+        Returns:
+            The reply, or None.
+
+        Raises:
+            QueryFailed: no reply within the timeout, nobody serves the key, or the world is gone.
+        """
         try:
             reply = self._replies.try_recv()
         except zenoh.ZError:
@@ -141,7 +176,17 @@ class PendingReply:
         return message
 
     def wait(self, poll_interval_s: float = 0.001) -> Message:
-        """Block until the reply (for command-line tools and tests, never inside a tree tick)."""
+        """Block until the reply (for command-line tools and tests, never inside a tree tick).
+
+        Args:
+            poll_interval_s: how long to sleep between polls.
+
+        Returns:
+            The reply.
+
+        Raises:
+            QueryFailed: there will be no reply.
+        """
         while (message := self.poll()) is None:
             time.sleep(poll_interval_s)
         return message
@@ -155,5 +200,20 @@ def call(
     timeout_s: float = 10.0,
     gone: Callable[[], str | None] | None = None,
 ) -> Message:
-    """Send one command and wait for its reply."""
+    """Send one command and wait for its reply.
+
+    Args:
+        session: the bus session.
+        key: the command's key.
+        meta: its metadata.
+        arrays: its arrays.
+        timeout_s: how long the reply may take.
+        gone: says why the server is gone, if it is.
+
+    Returns:
+        The reply.
+
+    Raises:
+        QueryFailed: there will be no reply.
+    """
     return PendingReply(session, key, meta, arrays, timeout_s, gone).wait()

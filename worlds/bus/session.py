@@ -20,20 +20,49 @@ class EndpointError(ValueError):
 
 
 def check_endpoint(endpoint: str) -> str:
+    """Check that ``endpoint`` is a Zenoh locator such as ``tcp/127.0.0.1:7447``.
+
+    Args:
+        endpoint: the endpoint.
+
+    Returns:
+        The endpoint.
+
+    Raises:
+        EndpointError: it is not a locator.
+    """
     if not _ENDPOINT.match(endpoint):
         raise EndpointError(f"endpoint {endpoint!r}: expected a locator such as 'tcp/127.0.0.1:7447'")
     return endpoint
 
 
 def free_tcp_endpoint(host: str = "127.0.0.1") -> str:
-    """A TCP endpoint on ``host`` with a port the OS just reported free."""
+    """A TCP endpoint on ``host`` with a port the OS just reported free.
+
+    Args:
+        host: the host to bind.
+
+    Returns:
+        The endpoint, ``tcp/<host>:<port>``.
+    """
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
         probe.bind((host, 0))
         return f"tcp/{host}:{probe.getsockname()[1]}"
 
 
 def open_session(listen: list[str] | None = None, connect: list[str] | None = None) -> zenoh.Session:
-    """A peer session with multicast scouting off and the given explicit endpoints."""
+    """A peer session with multicast scouting off and the given explicit endpoints.
+
+    Args:
+        listen: the endpoints to listen on.
+        connect: the endpoints to connect to.
+
+    Returns:
+        The session.
+
+    Raises:
+        EndpointError: an endpoint is not a locator.
+    """
     listen = [check_endpoint(e) for e in listen or []]
     connect = [check_endpoint(e) for e in connect or []]
     config = zenoh.Config()

@@ -23,6 +23,14 @@ def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[
     """Run one fixed episode (the seed's home, or one of ``area_m2``) with per-stage timing.
 
     The episode explores to its budget whatever the stopping rule, so runs compare the same steps.
+
+    Args:
+        config: the settings (the stopping rule is set to the budget).
+        seed: the home's and the episode's seed.
+        area_m2: the home's floor area (the seed's own when None).
+
+    Returns:
+        The report: the home, the episode's time and status, and each stage's timing.
     """
     config = load_config(overrides=["stop.rule=budget"], base=config)
     timer = StageTimer()
@@ -39,6 +47,14 @@ def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[
 
 
 def format_step_table(report: dict[str, Any]) -> str:
+    """The `bench_step` report as a table: one line for the episode, one per stage.
+
+    Args:
+        report: the report.
+
+    Returns:
+        The table's text.
+    """
     lines = [
         f"bench step: seed {report['seed']}, {report['area_m2']} m², {report['rooms']} rooms, "
         f"{report['steps']} steps, episode {report['episode_s']:.2f} s "
@@ -53,6 +69,14 @@ def format_step_table(report: dict[str, Any]) -> str:
 
 
 def format_world_table(report: dict[str, Any]) -> str:
+    """The world bench's report as a table: one row per floor area, one column per figure.
+
+    Args:
+        report: the report.
+
+    Returns:
+        The table's text.
+    """
     lines = [f"bench world: camera {report['camera']}, median of {report['repeats']} homes per area"]
     rows = report["areas"]
     keys = list(next(iter(rows.values())))
@@ -63,12 +87,29 @@ def format_world_table(report: dict[str, Any]) -> str:
 
 
 def dump(report: dict[str, Any]) -> str:
+    """A report as indented JSON, for ``--json``.
+
+    Args:
+        report: the report.
+
+    Returns:
+        The JSON text.
+    """
     return json.dumps(report, indent=2)
 
 
 def bench_skills(n: int = 100, seed: int = 0, scenes: Sequence[tuple[str, int]] = ()) -> dict[str, Any]:
     """IK solve and trajectory computation times on the robot's own URDF and joint limits; with
-    ``scenes`` (tabletop task, variant), the robot explores each and every skill run is timed."""
+    ``scenes`` (tabletop task, variant), the robot explores each and every skill run is timed.
+
+    Args:
+        n: the IK solves to time.
+        seed: the random poses' seed.
+        scenes: the tabletop (task, variant) pairs the robot explores.
+
+    Returns:
+        The report.
+    """
     report = _bench_kinematics(n, seed)
     if scenes:
         from agent.app.eval.robot_tabletop import run_robot
@@ -102,6 +143,14 @@ def _bench_kinematics(n: int, seed: int) -> dict[str, Any]:
 
 
 def format_skills_table(report: dict[str, Any]) -> str:
+    """The `bench_skills` report as lines: IK and trajectory timing, then each skill's runs.
+
+    Args:
+        report: the report.
+
+    Returns:
+        The table's text.
+    """
     return "\n".join([
         f"bench skills: {report['n']} random reachable TCP poses, seed {report['seed']}, {report['dof']} joints "
         "(lift + Panda)",

@@ -23,6 +23,22 @@ def bench_arm(urdf_xml: str, joints: Sequence[str], tcp_frame: str, n: int = 100
     Each trajectory runs from the start configuration to the IK solution through ``waypoints``
     evenly spaced joint waypoints (passing through them at speed), sampled every ``dt``. Without
     ``limits``: the URDF's velocity limits, accelerations 4× and jerks 40× those.
+
+    Args:
+        urdf_xml: the robot's URDF.
+        joints: the arm's joints, in order.
+        tcp_frame: the TCP's frame.
+        n: how many IK solves.
+        seed: the random targets' seed.
+        limits: the joint limits (from the URDF when None).
+        dt: the trajectories' sample time (s).
+        waypoints: the joint waypoints of each trajectory, ends included.
+
+    Returns:
+        The figures.
+
+    Raises:
+        ValueError: n below 1 or fewer than two waypoints.
     """
     if n < 1:
         raise ValueError(f"n: {n!r} must be at least 1")

@@ -33,7 +33,14 @@ BINS = (1, 2, 3, 4, 6, 9, 14, 20, math.inf)
 
 
 def branches(frontiers: int) -> int:
-    """Q evaluations of the full recursion over ``frontiers`` (at most six): Σ_k n!/(n−k)!."""
+    """Q evaluations of the full recursion over ``frontiers`` (at most six): Σ_k n!/(n−k)!.
+
+    Args:
+        frontiers: the frontiers of the planning step.
+
+    Returns:
+        The count.
+    """
     n = min(frontiers, PLANNED_FRONTIERS)
     return sum(math.perm(n, k) for k in range(1, n + 1))
 
@@ -44,6 +51,15 @@ def bench_plan(homes: Sequence[tuple[int, float]], model: Path | None = None, st
 
     The parts are timed inside the chooser the episode runs (`bellman_chooser`'s timer), so what is
     measured is what was decided; only the oracle's labelling is extra work, done on the same map.
+
+    Args:
+        homes: the (seed, area m²) homes.
+        model: the network file (the shipped one when None).
+        steps: the episode's steps per home.
+        progress: called with (home number, homes, plans so far), if given.
+
+    Returns:
+        The report: a row per frontier count, with medians in ms.
     """
     from worlds.home import generate_home
 
@@ -99,6 +115,14 @@ def _bin_name(samples: list[dict[str, float]]) -> str:
 
 
 def format_plan_table(report: dict[str, Any]) -> str:
+    """The `bench_plan` report as a table: one row per frontier count, medians in ms.
+
+    Args:
+        report: the report.
+
+    Returns:
+        The table's text.
+    """
     homes = ", ".join(f"{h['seed']} ({h['area_m2']:.0f} m²)" for h in report["homes"])
     lines = [f"bench plan: LFE exploring homes {homes} for {report['steps']} steps, {report['plans']} planning "
              "steps; medians in ms",

@@ -36,6 +36,14 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``homebot acsg``: load a scene graph and print, plan or draw it.
+
+    Args:
+        argv: the command line's arguments (``sys.argv[1:]`` when None).
+
+    Returns:
+        The exit status: 0 on success.
+    """
     try:
         args = _parser().parse_args(argv)
     except SystemExit as exit_:

@@ -43,6 +43,14 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``homebot lfe``: make the training data (``data``) or train the network (``train``).
+
+    Args:
+        argv: the command line's arguments (``sys.argv[1:]`` when None).
+
+    Returns:
+        The exit status: 0 on success.
+    """
     try:
         args = _parser().parse_args(argv)
     except SystemExit as exit_:
@@ -105,7 +113,11 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def print_training(event: dict) -> None:
-    """One line per epoch and for the start and the end; the steps on one line that rewrites itself."""
+    """One line per epoch and for the start and the end; the steps on one line that rewrites itself.
+
+    Args:
+        event: the training's progress event.
+    """
     kind = event["event"]
     if kind == "step":
         sys.stderr.write(f"\r  epoch {event['epoch']}: step {event['step']}/{event['steps']}, "

@@ -61,7 +61,14 @@ def _rows(registry: SkillRegistry) -> list[dict[str, Any]]:
 
 
 def list_skills(args: argparse.Namespace) -> int:
-    """``homebot skills``: 0, or 1 when a skill is broken or declared twice."""
+    """``homebot skills``: 0, or 1 when a skill is broken or declared twice.
+
+    Args:
+        args: the parsed command line (``--json``).
+
+    Returns:
+        The exit status.
+    """
     rows = _rows(SkillRegistry())
     if args.json:
         print(json.dumps(rows, indent=2))
@@ -88,7 +95,14 @@ def _bindings(pairs: list[str]) -> dict[str, str]:
 
 
 def run_skill_command(args: argparse.Namespace) -> int:
-    """``homebot skill run``: 0 when the skill succeeds, 1 when it fails, 2 when it cannot be made."""
+    """``homebot skill run``: 0 when the skill succeeds, 1 when it fails, 2 when it cannot be made.
+
+    Args:
+        args: the parsed command line: the skill, its bindings, the world.
+
+    Returns:
+        The exit status.
+    """
     from agent.app.runtime.world_process import WorldProcess, WorldStartError
     from worlds.bus.keys import Keys, check_namespace
     from worlds.bus.link import WorldLink

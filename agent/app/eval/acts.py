@@ -44,7 +44,14 @@ CAUSES: tuple[tuple[str, str], ...] = (
 
 
 def cause(reason: str) -> str:
-    """The cause a failure's reason names (`CAUSES`), else "other"."""
+    """The cause a failure's reason names (`CAUSES`), else "other".
+
+    Args:
+        reason: a failure's reason.
+
+    Returns:
+        The cause's name.
+    """
     return next((name for pattern, name in CAUSES if re.search(pattern, reason)), "other")
 
 
@@ -68,6 +75,12 @@ class ActSummary:
     failures: Counter[tuple[str, str]] = field(default_factory=Counter)  # (stage, cause) -> acts
 
     def add(self, result: dict[str, Any], stopping: Callable[[], StoppingRule] | None = None) -> None:
+        """Count one finished episode's acts, its answer, and with ``stopping`` the stopped answer.
+
+        Args:
+            result: the episode's result.
+            stopping: makes a fresh stopping rule, if given.
+        """
         acts = result.get("acts") or []
         right = result.get("answer") is not None and result.get("answer") == result.get("ground_truth")
         looked = any(act.get("looked") for act in acts)
@@ -99,7 +112,16 @@ class ActSummary:
 def summarise(results: Iterable[dict[str, Any]], method: str | None = None,
               stopping: Callable[[], StoppingRule] | None = None) -> ActSummary:
     """The summary of every finished result (of ``method`` only, when given); with ``stopping`` (a
-    fresh rule per call) also how many it would have answered right."""
+    fresh rule per call) also how many it would have answered right.
+
+    Args:
+        results: the episodes' results.
+        method: the only method counted, if given.
+        stopping: makes a fresh stopping rule, if given.
+
+    Returns:
+        The summary.
+    """
     summary = ActSummary()
     for result in results:
         if result.get("status") != "failed" and (method is None or result.get("variant") == method):
@@ -109,7 +131,11 @@ def summarise(results: Iterable[dict[str, Any]], method: str | None = None,
 
 def default_stopping() -> Callable[[], StoppingRule]:
     """Fresh copies of the default stopping rule: conformal prediction at the default ε with the
-    calibration that ships for the default policy and VLM."""
+    calibration that ships for the default policy and VLM.
+
+    Returns:
+        A function making a fresh rule per call.
+    """
     config = load_config()
     calibration, _ = calibration_for(config)
     q_hat = calibration.q_hat(config.stop.epsilon)
@@ -117,6 +143,14 @@ def default_stopping() -> Callable[[], StoppingRule]:
 
 
 def format_summary(summary: ActSummary) -> str:
+    """The summary as lines a person reads: answers, acts and their outcomes, failure causes.
+
+    Args:
+        summary: the summary.
+
+    Returns:
+        The text.
+    """
     def share(part: int, whole: int) -> str:
         return f"{part}/{whole} ({100 * part / whole:.0f} %)" if whole else f"{part}/0"
 

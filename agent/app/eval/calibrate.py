@@ -27,19 +27,47 @@ FULL_BUDGET = "stop.rule=budget"  # calibration and evaluation episodes never st
 
 
 def full_budget_jobs(suite: Path, config: Config, limit: int | None = None) -> list[Job]:
-    """One full-budget episode per suite entry under the config's exploration method."""
+    """One full-budget episode per suite entry under the config's exploration method.
+
+    Args:
+        suite: the question suite.
+        config: the settings.
+        limit: the most entries used (all when None).
+
+    Returns:
+        The jobs.
+    """
     method = config.explore.method
     return [Job(entry["id"], method, entry["seed"], entry["scenario"], (FULL_BUDGET,))
             for entry in read_suite(suite)[:limit]]
 
 
 def episodes_path(out: Path) -> Path:
+    """Where a calibration file's episodes are kept: beside it, as ``<name>.episodes.jsonl``.
+
+    Args:
+        out: the calibration file.
+
+    Returns:
+        The episodes' path.
+    """
     return out.with_name(out.stem + ".episodes.jsonl")
 
 
 def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: Config,
                     worlds: list[WorldAddress] | None = None) -> list[dict[str, Any]]:
-    """Run what is missing from ``results_path`` (refusing to mix policies) and return every job's result."""
+    """Run what is missing from ``results_path`` (refusing to mix policies) and return every job's result.
+
+    Args:
+        jobs: the episodes.
+        results_path: the results file (JSON lines), resumed.
+        workers: episodes run at once.
+        config: the settings.
+        worlds: the worlds to run in (started here when None).
+
+    Returns:
+        The results, in job order.
+    """
     _check_same_policy(results_path.with_suffix(".json"), config)
     run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds)
     return results_for(jobs, results_path)
@@ -47,7 +75,19 @@ def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: C
 
 def calibrate(suite: Path, out: Path, workers: int, config: Config, limit: int | None = None,
               worlds: list[WorldAddress] | None = None) -> Calibration:
-    """Run the calibration episodes still missing, then write the calibration file ``out``."""
+    """Run the calibration episodes still missing, then write the calibration file ``out``.
+
+    Args:
+        suite: the question suite.
+        out: the calibration file.
+        workers: episodes run at once.
+        config: the settings.
+        limit: the most entries used (all when None).
+        worlds: the worlds to run in (started here when None).
+
+    Returns:
+        The calibration written.
+    """
     jobs = full_budget_jobs(suite, config, limit)
     results = run_full_budget(jobs, episodes_path(out), workers, config, worlds)
     episodes = [CalibrationEpisode(r["id"], r["seed"], r["ground_truth"], r["step_scores"])

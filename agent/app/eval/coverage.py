@@ -63,7 +63,14 @@ LEARNED = (Method.LFE, Method.GREEDY)
 
 
 def model_digest(model: Path | None) -> str:
-    """The first 12 hex digits of the SHA-256 of the network file (the shipped one for None)."""
+    """The first 12 hex digits of the SHA-256 of the network file (the shipped one for None).
+
+    Args:
+        model: the network file, or None.
+
+    Returns:
+        The digest.
+    """
     from agent.lfe.estimator import SHIPPED_MODEL
 
     return hashlib.sha256((SHIPPED_MODEL if model is None else model).read_bytes()).hexdigest()[:12]
@@ -71,14 +78,32 @@ def model_digest(model: Path | None) -> str:
 
 def jobs(homes_per_size: int, methods: Iterable[str], steps: int = 500, model: str | None = None) -> list[CoverageJob]:
     """Every (home, method) pair, homes in size order, methods in the given order per home; the
-    learned methods' jobs carry ``model``, the digest of the network they use."""
+    learned methods' jobs carry ``model``, the digest of the network they use.
+
+    Args:
+        homes_per_size: the homes per size band.
+        methods: the exploration methods.
+        steps: each episode's steps.
+        model: the network's digest, for the learned methods.
+
+    Returns:
+        The jobs.
+    """
     methods = list(methods)
     return [CoverageJob(size, SEED_BASE + 1000 * band + index, method, steps, model if method in LEARNED else None)
             for band, size in enumerate(SIZES) for index in range(homes_per_size) for method in methods]
 
 
 def home_area(size: str, seed: int) -> float:
-    """The floor area of the home of ``seed``, drawn within its size band."""
+    """The floor area of the home of ``seed``, drawn within its size band.
+
+    Args:
+        size: the size band.
+        seed: the home's seed.
+
+    Returns:
+        The area (m²).
+    """
     low, high = SIZES[size]
     return float(np.random.default_rng(seed).uniform(low, high))
 
@@ -135,7 +160,23 @@ def run_job(job: CoverageJob, model: Path | None) -> dict[str, Any]:
 def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str], workers: int = 1,
                       model: Path | None = None, steps: int = 500,
                       progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> dict[str, Any]:
-    """Run the episodes not yet in ``<out_dir>/coverage-results.jsonl``; return the table."""
+    """Run the episodes not yet in ``<out_dir>/coverage-results.jsonl``; return the table.
+
+    Args:
+        out_dir: where results, table and plot go.
+        homes_per_size: the homes per size band.
+        methods: the exploration methods.
+        workers: episodes run at once.
+        model: the network file (the shipped one when None).
+        steps: each episode's steps.
+        progress: called with (done, total, row) after each episode, if given.
+
+    Returns:
+        The table (`coverage_table`), the rows, the results file and the episode count.
+
+    Raises:
+        ValueError: an unknown method, none, or a count, step budget or model file that is not usable.
+    """
     methods = list(methods)
     unknown = sorted(set(methods) - set(Method))
     if unknown or not methods:
@@ -170,7 +211,15 @@ def _key(row: dict[str, Any]) -> tuple[str, int, str, int, str | None]:
 
 
 def coverage_table(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, dict[str, tuple[float, float]]]:
-    """Method -> size (and "overall", over every home) -> (mean coverage %, standard error)."""
+    """Method -> size (and "overall", over every home) -> (mean coverage %, standard error).
+
+    Args:
+        rows: the episodes' results.
+        methods: the methods, in the table's order.
+
+    Returns:
+        The table.
+    """
     table: dict[str, dict[str, tuple[float, float]]] = {}
     for method in methods:
         mine = [r for r in rows if r["method"] == method]
@@ -183,7 +232,14 @@ def coverage_table(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, 
 
 
 def format_table(table: dict[str, dict[str, tuple[float, float]]]) -> str:
-    """Our coverage beside the paper's, as a Markdown table a person can paste into a note."""
+    """Our coverage beside the paper's, as a Markdown table a person can paste into a note.
+
+    Args:
+        table: the `coverage_table`.
+
+    Returns:
+        The Markdown.
+    """
     columns = [*SIZES, "overall"]
     lines = ["| method | " + " | ".join(columns) + " | paper (" + " / ".join(columns) + ") |",
              "|---" * (len(columns) + 2) + "|"]
@@ -195,7 +251,16 @@ def format_table(table: dict[str, dict[str, tuple[float, float]]]) -> str:
 
 
 def plot_curves(rows: list[dict[str, Any]], methods: list[str], path: Path) -> Path:
-    """Mean coverage against steps, one panel per size, one line per method."""
+    """Mean coverage against steps, one panel per size, one line per method.
+
+    Args:
+        rows: the episodes' results.
+        methods: the methods.
+        path: the image file.
+
+    Returns:
+        The path written.
+    """
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(4.2 * len(SIZES), 3.6), layout="constrained")
@@ -219,6 +284,13 @@ def plot_curves(rows: list[dict[str, Any]], methods: list[str], path: Path) -> P
 
 
 def print_progress(done: int, total: int, row: dict[str, Any]) -> None:
+    """Rewrite one line on stderr: the episodes done and the last one's coverage.
+
+    Args:
+        done: episodes done.
+        total: episodes in all.
+        row: the last episode's result.
+    """
     end = "\n" if done == total else ""
     sys.stderr.write(f"\r  {done}/{total} episodes, last {row['size']} home {row['seed']} {row['method']}: "
                      f"{row['coverage']:.1f} % in {row['seconds']:.0f} s   {end}")

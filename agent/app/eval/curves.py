@@ -38,39 +38,87 @@ class Rates:
 
 
 def answer_after(step_scores: list[dict[str, Any]], k: int) -> str | None:
-    """The answer an episode would give if it stopped after its first ``k`` steps."""
+    """The answer an episode would give if it stopped after its first ``k`` steps.
+
+    Args:
+        step_scores: the episode's step records.
+        k: the steps kept.
+
+    Returns:
+        The answer's letter, or None with no step.
+    """
     steps = steps_from_records(step_scores[:k])
     return AnswerLog(steps).fallback().best() if steps else None
 
 
 def steps_taken(result: dict[str, Any], taus: np.ndarray) -> np.ndarray:
-    """How many steps an episode has taken at each normalised time: max(1, floor(τ·T))."""
+    """How many steps an episode has taken at each normalised time: max(1, floor(τ·T)).
+
+    Args:
+        result: the episode's result (its ``budget`` T).
+        taus: the normalised times τ.
+
+    Returns:
+        The steps, one per τ.
+    """
     budget = max(1, int(result["budget"]))
     return np.maximum(1, np.floor(taus * budget + 1e-9).astype(int))
 
 
 def success_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
-    """1.0 where the episode's answer at each normalised time is right, else 0.0."""
+    """1.0 where the episode's answer at each normalised time is right, else 0.0.
+
+    Args:
+        result: the episode's result.
+        taus: the normalised times.
+
+    Returns:
+        One value per τ.
+    """
     return np.array([answer_after(result["step_scores"], int(k)) == result["ground_truth"]
                      for k in steps_taken(result, taus)], dtype=float)
 
 
 def target_seen_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
-    """1.0 where the question's target had been in a head frame by each normalised time, else 0.0."""
+    """1.0 where the question's target had been in a head frame by each normalised time, else 0.0.
+
+    Args:
+        result: the episode's result, with the world's report.
+        taus: the normalised times.
+
+    Returns:
+        One value per τ.
+    """
     seen = result["evaluation"]["target_seen"]
     first = np.inf if seen is None else seen["step"]
     return (first < steps_taken(result, taus)).astype(float)
 
 
 def coverage_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
-    """The share of the home's free floor seen by each normalised time (0..1)."""
+    """The share of the home's free floor seen by each normalised time (0..1).
+
+    Args:
+        result: the episode's result, with the world's report.
+        taus: the normalised times.
+
+    Returns:
+        One share per τ.
+    """
     evaluation = result["evaluation"]
     seen = _by_frame(evaluation["floor_seen_by_frame"], steps_taken(result, taus))
     return seen / evaluation["free_floor_m2"] if evaluation["free_floor_m2"] > 0 else np.zeros(len(taus))
 
 
 def rooms_entered_at(result: dict[str, Any], taus: np.ndarray = TAU_GRID) -> np.ndarray:
-    """How many rooms the base has entered by each normalised time."""
+    """How many rooms the base has entered by each normalised time.
+
+    Args:
+        result: the episode's result, with the world's report.
+        taus: the normalised times.
+
+    Returns:
+        One count per τ.
+    """
     return _by_frame(result["evaluation"]["rooms_entered_by_frame"], steps_taken(result, taus))
 
 
@@ -82,24 +130,56 @@ def _by_frame(values: list[float], steps: np.ndarray) -> np.ndarray:
 
 
 def success_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
-    """Mean success per method at each τ, over that method's finished episodes."""
+    """Mean success per method at each τ, over that method's finished episodes.
+
+    Args:
+        results: the episodes' results.
+        taus: the normalised times.
+
+    Returns:
+        The rates by method.
+    """
     return _rates(results, success_at, lambda result: bool(result.get("step_scores")), taus)
 
 
 def target_seen_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
     """Share of each method's finished episodes with the target seen by each τ; episodes without a
-    world's report (an older results file, a world that went away) are left out."""
+    world's report (an older results file, a world that went away) are left out.
+
+    Args:
+        results: the episodes' results.
+        taus: the normalised times.
+
+    Returns:
+        The rates by method.
+    """
     return _rates(results, target_seen_at,
                   lambda result: bool(result.get("step_scores")) and result.get("evaluation") is not None, taus)
 
 
 def coverage_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
-    """Mean share of the free floor seen per method at each τ, over episodes with a report."""
+    """Mean share of the free floor seen per method at each τ, over episodes with a report.
+
+    Args:
+        results: the episodes' results.
+        taus: the normalised times.
+
+    Returns:
+        The rates by method.
+    """
     return _rates(results, coverage_at, _reported, taus)
 
 
 def rooms_entered_curves(results: list[dict[str, Any]], taus: np.ndarray = TAU_GRID) -> Rates:
-    """Mean number of rooms entered per method at each τ, over episodes with a report."""
+    """Mean number of rooms entered per method at each τ, over episodes with a report.
+
+    Args:
+        results: the episodes' results.
+        taus: the normalised times.
+
+    Returns:
+        The means by method.
+    """
     return _rates(results, rooms_entered_at, _reported, taus)
 
 
@@ -131,7 +211,16 @@ class Panel:
 
 
 def explore_panels(results: list[dict[str, Any]], title: str, taus: np.ndarray = TAU_GRID) -> list[Panel]:
-    """Success, target seen, floor seen and rooms entered, in that order."""
+    """Success, target seen, floor seen and rooms entered, in that order.
+
+    Args:
+        results: the episodes' results.
+        title: the success panel's title.
+        taus: the normalised times.
+
+    Returns:
+        The panels.
+    """
     return [
         Panel(success_curves(results, taus), "", "success rate [%]", title),
         Panel(target_seen_curves(results, taus), " target seen", "target seen so far [%]",
@@ -143,7 +232,13 @@ def explore_panels(results: list[dict[str, Any]], title: str, taus: np.ndarray =
 
 
 def write_curves_csv(path: Path, panels: list[Panel], taus: np.ndarray = TAU_GRID) -> None:
-    """One row per τ: each panel's columns, one per method (success first, as `explore_panels` orders)."""
+    """One row per τ: each panel's columns, one per method (success first, as `explore_panels` orders).
+
+    Args:
+        path: the CSV file.
+        panels: the panels.
+        taus: the normalised times.
+    """
     columns = [(f"{m}{panel.column} (n={n})", panel.rates.by_method[m])
                for panel in panels for m, n in panel.rates.counts.items()]
     with open(path, "w", newline="") as out:
@@ -154,7 +249,13 @@ def write_curves_csv(path: Path, panels: list[Panel], taus: np.ndarray = TAU_GRI
 
 
 def plot_curves(path: Path, panels: list[Panel], taus: np.ndarray = TAU_GRID) -> None:
-    """The panels side by side, two to a row, one colour per method throughout."""
+    """The panels side by side, two to a row, one colour per method throughout.
+
+    Args:
+        path: the image file.
+        panels: the panels.
+        taus: the normalised times.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -40,7 +40,15 @@ COLUMNS = ("success", "object_recovery", "state_recovered", "unexplored_space", 
 
 
 def run_symbolic(task: str, seed: int) -> dict[str, Any]:
-    """Explore one tabletop variant with the symbolic executor; its Table I metrics."""
+    """Explore one tabletop variant with the symbolic executor; its Table I metrics.
+
+    Args:
+        task: the tabletop task.
+        seed: the variant's seed.
+
+    Returns:
+        The metrics, with the seconds taken.
+    """
     scene = tabletop_variant(task, seed)
     world = SymbolicScene.from_tabletop(scene)
     started = time.monotonic()
@@ -52,7 +60,16 @@ def run_symbolic(task: str, seed: int) -> dict[str, Any]:
 
 
 def run_scene(executor: str, task: str, seed: int) -> dict[str, Any]:
-    """One result row: the scene explored by ``executor``."""
+    """One result row: the scene explored by ``executor``.
+
+    Args:
+        executor: "robot" or "symbolic".
+        task: the tabletop task.
+        seed: the variant's seed.
+
+    Returns:
+        The row.
+    """
     if executor == "robot":
         from agent.app.eval.robot_tabletop import run_robot  # PyBullet and the arm only when asked for
 
@@ -66,7 +83,22 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
                          executor: str = "symbolic",
                          progress: Callable[[int, int, dict[str, Any]], None] | None = None,
                          workers: int = 1) -> dict[str, Any]:
-    """Run the scenes not yet in ``<out_dir>/interactive-results.jsonl``; return the per-task table."""
+    """Run the scenes not yet in ``<out_dir>/interactive-results.jsonl``; return the per-task table.
+
+    Args:
+        out_dir: where the results and the table go.
+        tasks: the tabletop tasks.
+        variants: the variants per task.
+        executor: "symbolic" or "robot".
+        progress: called with (done, total, row) after each scene, if given.
+        workers: scenes run at once.
+
+    Returns:
+        The table, the results file and the scene count.
+
+    Raises:
+        ValueError: an unknown task or executor.
+    """
     tasks = list(tasks)
     unknown = sorted(set(tasks) - set(TASKS))
     if unknown:
@@ -94,12 +126,27 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
 
 
 def table(rows: list[dict[str, Any]], tasks: list[str]) -> dict[str, dict[str, tuple[float, float]]]:
-    """Task -> column -> (mean, standard error over the variants)."""
+    """Task -> column -> (mean, standard error over the variants).
+
+    Args:
+        rows: the scenes' results.
+        tasks: the tasks, in the table's order.
+
+    Returns:
+        The table.
+    """
     return {task: {column: mean_and_sem(float(r[column]) for r in rows if r["task"] == task) for column in COLUMNS}
             for task in tasks if any(r["task"] == task for r in rows)}
 
 
 def print_progress(done: int, total: int, row: dict[str, Any]) -> None:
+    """Rewrite one line on stderr: the scenes done and how the last one went.
+
+    Args:
+        done: scenes done.
+        total: scenes in all.
+        row: the last scene's result.
+    """
     end = "\n" if done == total else ""
     sys.stderr.write(f"\r  {done}/{total} scenes, last {row['task']} {row['seed']}: "
                      f"{'success' if row['success'] else 'failed'}, GED {row['graph_edit_distance']:g}   {end}")

@@ -20,7 +20,19 @@ METHODS = ("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv")
 
 
 def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job]:
-    """Every (scenario, method) pair, methods interleaved so partial results stay comparable."""
+    """Every (scenario, method) pair, methods interleaved so partial results stay comparable.
+
+    Args:
+        suite: the question suite.
+        methods: the exploration methods.
+        limit: the most entries used (all when None).
+
+    Returns:
+        The jobs.
+
+    Raises:
+        ValueError: an unknown method.
+    """
     unknown = sorted(set(methods) - set(METHODS))
     if unknown:
         raise ValueError(f"--methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})")
@@ -34,7 +46,20 @@ def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job
 
 def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: int, config: Config,
                      limit: int | None = None, worlds: list[WorldAddress] | None = None) -> dict[str, Any]:
-    """Run what is missing, then write ``curves.csv`` and ``curves.png``; return the curves."""
+    """Run what is missing, then write ``curves.csv`` and ``curves.png``; return the curves.
+
+    Args:
+        suite: the question suite.
+        methods: the exploration methods.
+        out_dir: where the results and curves go.
+        workers: episodes run at once.
+        config: the settings.
+        limit: the most entries used (all when None).
+        worlds: the worlds to run in (started here when None).
+
+    Returns:
+        Every panel's curves by method, the τ grid, the episodes counted, the failures, the results file.
+    """
     jobs = explore_jobs(suite, methods, limit)
     results_path = out_dir / "explore-results.jsonl"
     run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds)

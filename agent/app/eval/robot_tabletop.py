@@ -38,7 +38,15 @@ PUT_BACK_M = 0.02
 
 
 def run_robot(task: str, seed: int) -> dict[str, Any]:
-    """Explore one tabletop variant with the robot; its Table I metrics and the skills' figures."""
+    """Explore one tabletop variant with the robot; its Table I metrics and the skills' figures.
+
+    Args:
+        task: the tabletop task.
+        seed: the variant's seed.
+
+    Returns:
+        The metrics and figures.
+    """
     scene = tabletop_variant(task, seed)
     started = time.monotonic()
     with local_world() as served:
@@ -66,12 +74,28 @@ def run_robot(task: str, seed: int) -> dict[str, Any]:
 
 
 def object_positions(world: World, scene: TabletopScene) -> dict[str, np.ndarray]:
-    """Instance id -> the object's centre now, for every small object of the scene."""
+    """Instance id -> the object's centre now, for every small object of the scene.
+
+    Args:
+        world: the simulated world.
+        scene: the tabletop scene.
+
+    Returns:
+        The positions.
+    """
     return {str(obj.instance_id): np.asarray(world.object_position(obj.instance_id)) for obj in scene.objects}
 
 
 def part_states(world: World, scene: TabletopScene) -> dict[str, float]:
-    """Part instance id -> 1.0 open, 0.0 closed (within `CLOSED_SHARE` of its range from closed)."""
+    """Part instance id -> 1.0 open, 0.0 closed (within `CLOSED_SHARE` of its range from closed).
+
+    Args:
+        world: the simulated world.
+        scene: the tabletop scene.
+
+    Returns:
+        The states.
+    """
     joints = world.part_states()
     states = {}
     for _, placement in scene.storage:
@@ -88,6 +112,13 @@ def in_world_ids(graph: ACSG, memory: InstanceMemory) -> ACSG:
     Ids whose segmentation id is unknown, or already taken by another instance (the memory split
     one thing in two), keep their memory id prefixed with ``m``: they cannot match the ground
     truth and count against the exploration, as they should.
+
+    Args:
+        graph: the explored graph, in memory ids.
+        memory: the robot's instance memory.
+
+    Returns:
+        The renamed graph.
     """
     taken: set[str] = set()
     names: dict[str, str] = {}  # old node id -> new, objects first (actions are named after them)

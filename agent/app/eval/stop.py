@@ -60,16 +60,41 @@ class SweepPoint:
 
 
 def episode_steps(result: dict[str, Any]) -> list[StepScores]:
+    """The scored steps of an episode's result, in order.
+
+    Args:
+        result: the episode's result.
+
+    Returns:
+        The steps.
+    """
     return steps_from_records(result["step_scores"])
 
 
 def usable(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Episodes that finished with at least one scored step."""
+    """Episodes that finished with at least one scored step.
+
+    Args:
+        results: the episodes' results.
+
+    Returns:
+        The usable ones.
+    """
     return [r for r in results if r["status"] != "failed" and r["step_scores"]]
 
 
 def evaluate_rule(results: list[dict[str, Any]], make: Callable[[], StoppingRule], parameter: float, name: str) -> SweepPoint:
-    """Replay a fresh rule from ``make()`` over every episode."""
+    """Replay a fresh rule from ``make()`` over every episode.
+
+    Args:
+        results: the episodes' results.
+        make: makes a fresh rule.
+        parameter: the rule's setting, recorded with the point.
+        name: the rule's name.
+
+    Returns:
+        The rule's success and normalised steps.
+    """
     correct, fractions = [], []
     for result in results:
         budget = max(1, int(result["budget"]))
@@ -80,7 +105,15 @@ def evaluate_rule(results: list[dict[str, Any]], make: Callable[[], StoppingRule
 
 
 def sweep(results: list[dict[str, Any]], calibration: Calibration) -> list[SweepPoint]:
-    """Every rule over its range of settings, plus running to the budget."""
+    """Every rule over its range of settings, plus running to the budget.
+
+    Args:
+        results: the episodes' results.
+        calibration: the conformal rule's calibration.
+
+    Returns:
+        One point per rule and setting.
+    """
     points = [evaluate_rule(results, BudgetRule, 0.0, "budget")]
     for epsilon in EPSILONS:
         q_hat = calibration.q_hat(epsilon)
@@ -94,7 +127,16 @@ def sweep(results: list[dict[str, Any]], calibration: Calibration) -> list[Sweep
 
 def coverage_table(results: list[dict[str, Any]], calibration: Calibration,
                    epsilons: tuple[float, ...] = EPSILONS) -> list[dict[str, Any]]:
-    """Empirical coverage of the sequence-level conformal set against 1 − ε, with its standard error."""
+    """Empirical coverage of the sequence-level conformal set against 1 − ε, with its standard error.
+
+    Args:
+        results: the episodes' results.
+        calibration: the calibration.
+        epsilons: the error rates ε.
+
+    Returns:
+        One row per ε.
+    """
     rows = []
     for epsilon in epsilons:
         q_hat = calibration.q_hat(epsilon)
@@ -119,6 +161,14 @@ def steps_to_reach(points: list[SweepPoint], rule: str, success: float) -> float
 
     The rule's settings are ordered by the steps they take and only improvements in success count
     (the upper envelope), so a noisy setting cannot make a rule look faster than it is.
+
+    Args:
+        points: the sweep's points.
+        rule: the rule's name.
+        success: the success level.
+
+    Returns:
+        The normalised steps, or None when the rule never reaches it.
     """
     ordered = sorted((p for p in points if p.rule == rule), key=lambda p: (p.normalised_steps, -p.success))
     envelope: list[SweepPoint] = []
@@ -135,7 +185,14 @@ def steps_to_reach(points: list[SweepPoint], rule: str, success: float) -> float
 
 
 def reach_table(points: list[SweepPoint]) -> list[dict[str, Any]]:
-    """For success levels just below the full-budget success: the normalised steps each rule needs."""
+    """For success levels just below the full-budget success: the normalised steps each rule needs.
+
+    Args:
+        points: the sweep's points (one "budget").
+
+    Returns:
+        One row per success level.
+    """
     full = next(p.success for p in points if p.rule == "budget")
     return [{"share_of_full_budget_success": share, "success": round(share * full, 4),
              **{rule: steps_to_reach(points, rule, share * full - 1e-9) for rule in ("cp", "relevance", "entropy")}}
@@ -144,7 +201,24 @@ def reach_table(points: list[SweepPoint]) -> list[dict[str, Any]]:
 
 def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: int, config: Config,
                   limit: int | None = None, worlds: list[WorldAddress] | None = None) -> dict[str, Any]:
-    """Run the test episodes still missing, replay every rule, and write the CSVs and the figure."""
+    """Run the test episodes still missing, replay every rule, and write the CSVs and the figure.
+
+    Args:
+        suite: the test question suite.
+        calibration_path: the calibration file.
+        out_dir: where the episodes, CSVs and figure go.
+        workers: episodes run at once.
+        config: the settings.
+        limit: the most entries used (all when None).
+        worlds: the worlds to run in (started here when None).
+
+    Returns:
+        The sweep's points, the coverage and reach tables, and the episode count.
+
+    Raises:
+        CalibrationError: the calibration does not fit the settings.
+        ValueError: no test episode finished.
+    """
     calibration = read_calibration(calibration_path)
     check_fits(calibration, calibration_path, config)
     jobs = full_budget_jobs(suite, config, limit)

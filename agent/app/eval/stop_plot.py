@@ -14,6 +14,14 @@ STYLE = {"cp": ("tab:blue", "o", "CP (ours), ε swept"),
 
 
 def plot_stop(path: Path, points: list[SweepPoint], coverage: list[dict[str, Any]], title: str) -> None:
+    """Draw the stopping rules' success against steps beside the conformal set's coverage against 1 − ε.
+
+    Args:
+        path: the image file.
+        points: the sweep's points.
+        coverage: the coverage table's rows.
+        title: the figure's title.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -34,7 +34,17 @@ QUESTION_SEEDS = 1000
 
 def home_cases(seeds: Iterable[int], questions: int = 3, views: int = 3,
                camera: CameraConfig = CameraConfig()) -> list[Case]:
-    """The cases of every home seed (module docstring), rendered with ``camera``."""
+    """The cases of every home seed (module docstring), rendered with ``camera``.
+
+    Args:
+        seeds: the home seeds.
+        questions: the questions per home.
+        views: the views per question.
+        camera: the camera.
+
+    Returns:
+        The cases.
+    """
     world = World(camera)
     intrinsics = Intrinsics(camera.width, camera.height, *camera.intrinsics())
     cases = []

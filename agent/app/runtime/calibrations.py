@@ -27,6 +27,12 @@ def made_with(config: Config) -> dict[str, Any]:
     left out, so moving a server does not invalidate a calibration. So is the step budget: a robot
     with fewer steps than the calibration episodes had keeps the guarantee (its set can only be
     larger), which docs/stopping.md spells out.
+
+    Args:
+        config: the settings.
+
+    Returns:
+        Those settings, as plain data.
     """
     vlm: dict[str, Any] = {"backend": config.vlm.backend}
     if config.vlm.backend == "sim":
@@ -52,21 +58,52 @@ def _plain(data: Any) -> Any:
 
 
 def mismatches(recorded: dict[str, Any], config: Config) -> list[str]:
-    """The dotted settings where ``config`` differs from ``recorded``, a `made_with` of earlier runs."""
+    """The dotted settings where ``config`` differs from ``recorded``, a `made_with` of earlier runs.
+
+    Args:
+        recorded: the settings recorded.
+        config: the settings now.
+
+    Returns:
+        One line per difference.
+    """
     return differences(recorded, made_with(config))
 
 
 def write_calibration(path: Path, calibration: Calibration) -> None:
+    """Write a calibration file atomically, as compact JSON.
+
+    Args:
+        path: the file.
+        calibration: the calibration.
+    """
     write_json_atomic(Path(path), calibration.to_json(), indent=None)
 
 
 def shipped_calibration(config: Config) -> Path:
-    """The calibration shipped with homebot for this exploration method and VLM backend."""
+    """The calibration shipped with homebot for this exploration method and VLM backend.
+
+    Args:
+        config: the settings (the method and the backend).
+
+    Returns:
+        The file's path (it may not exist).
+    """
     return SHIPPED_DIR / f"calibration-{config.explore.method}-{config.vlm.backend}.json"
 
 
 def calibration_for(config: Config) -> tuple[Calibration, Path]:
-    """The calibration this run's `stop` settings name, refused when it does not fit the policy."""
+    """The calibration this run's `stop` settings name, refused when it does not fit the policy.
+
+    Args:
+        config: the settings.
+
+    Returns:
+        The calibration and its path.
+
+    Raises:
+        CalibrationError: none ships for these settings, or it does not fit them.
+    """
     path = Path(config.stop.calibration) if config.stop.calibration else shipped_calibration(config)
     if not path.exists() and not config.stop.calibration:
         shipped = ", ".join(sorted(p.name for p in SHIPPED_DIR.glob("calibration-*.json"))) or "none"
@@ -82,7 +119,16 @@ def calibration_for(config: Config) -> tuple[Calibration, Path]:
 
 def check_fits(calibration: Calibration, path: Path, config: Config) -> None:
     """Refuse a calibration made with another policy or VLM, naming every difference, unless the
-    config says to accept it."""
+    config says to accept it.
+
+    Args:
+        calibration: the calibration.
+        path: its file, named in the error.
+        config: the settings now.
+
+    Raises:
+        CalibrationError: naming the differences.
+    """
     differences = mismatches(calibration.made_with, config)
     if differences and not config.stop.accept_mismatched_calibration:
         listed = "\n  ".join(differences)

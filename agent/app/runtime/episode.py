@@ -39,6 +39,17 @@ class EpisodeOutcome:
 
 
 class EpisodeRunner:
+    """Ticks an episode's tree until it answers, fails or runs out of time; a leaf's exception ends it as a failure.
+
+    Args:
+        root: the tree (set up here).
+        run_id: the run's id, in every snapshot.
+        sinks: where the snapshots go.
+        max_seconds: the episode's wall-clock limit.
+        tick_period_s: the least time between ticks.
+        timer: times the stages, if given.
+    """
+
     def __init__(self, root: py_trees.behaviour.Behaviour, run_id: str, sinks: list[SnapshotSink],
                  max_seconds: float, tick_period_s: float = 0.002,
                  timer: Any | None = None) -> None:
@@ -55,6 +66,11 @@ class EpisodeRunner:
         self.blackboard.register_key(bb.ANSWER, access=py_trees.common.Access.READ)
 
     def run(self) -> EpisodeOutcome:
+        """Tick the tree until it answers, fails or runs out of time, recording snapshots as it goes.
+
+        Returns:
+            How the episode ended.
+        """
         started = time.monotonic()
         ticks = 0
         try:

@@ -45,7 +45,18 @@ class LocalWorld:
 def local_world(ready_timeout_s: float = 10.0, namespace: str | None = None) -> Iterator[LocalWorld]:
     """Serve a `WorldServer` on its own session in a daemon thread; yield once its liveliness token
     is visible from the agent's session, so the first query already finds the queryables. Nothing
-    is reset: the caller sends its own reset."""
+    is reset: the caller sends its own reset.
+
+    Args:
+        ready_timeout_s: how long the world may take to become visible.
+        namespace: the bus namespace (a fresh one when None).
+
+    Yields:
+        The agent's session, the keys and the server.
+
+    Raises:
+        LocalWorldError: the world never became visible.
+    """
     endpoint = free_tcp_endpoint()
     keys = Keys(namespace or f"homebot/local-{uuid.uuid4().hex[:8]}")
     server_session = open_session(listen=[endpoint])

@@ -37,7 +37,14 @@ def save_map_png(path: Path, world_map: ExplorationMap, trajectory: list[tuple[f
                  result: dict[str, Any]) -> None:
     """Draw the run's map to ``path``. ``result`` is the run's result (question, answer, truth,
     status, steps) with the world's episode report under ``evaluation``; where that is None the
-    map and the route are drawn alone."""
+    map and the route are drawn alone.
+
+    Args:
+        path: the image file.
+        world_map: the robot's map.
+        trajectory: the base's poses (x, y, yaw), in order.
+        result: the run's result.
+    """
     evaluation = result["evaluation"]
     fig, ax = plt.subplots(figsize=(8.5, 8.5), dpi=110)
     ax.imshow(_map_image(world_map), origin="lower", extent=world_map.spec.extent(), interpolation="nearest")

@@ -52,6 +52,10 @@ def make_plugged_skills(settings: TreeSettings, link: WorldLink, registry: Skill
 def plug_into(root: py_trees.behaviour.Behaviour, plugged: list[tuple[str, PortedSkill]]) -> None:
     """Insert each made skill after its anchor node.
 
+    Args:
+        root: the tree.
+        plugged: each skill with the name of the node it goes after.
+
     Raises:
         PlugError: an anchor the tree does not have, naming the nodes it has.
     """

@@ -23,6 +23,17 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
     With one worker (or one call) they run here, in order; otherwise in up to ``workers`` spawned
     processes, so ``function`` and its arguments must be importable and picklable. Calls not yet
     started are cancelled when the caller stops early.
+
+    Args:
+        function: what each call runs.
+        calls: each call's arguments.
+        workers: processes at most.
+
+    Yields:
+        Each call's arguments and result.
+
+    Raises:
+        ValueError: fewer than one worker.
     """
     if workers < 1:
         raise ValueError(f"workers: {workers} must be at least 1")

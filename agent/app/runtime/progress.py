@@ -6,7 +6,11 @@ from typing import Any, TextIO
 
 
 class StepPrinter:
-    """A snapshot sink that prints the question once, then each step's VLM and move summaries."""
+    """A snapshot sink that prints the question once, then each step's VLM and move summaries.
+
+    Args:
+        out: where to print.
+    """
 
     def __init__(self, out: TextIO) -> None:
         self.out = out

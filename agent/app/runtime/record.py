@@ -12,6 +12,11 @@ def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
     """Write through a temporary file and rename, so a reader never sees half a file.
 
     ``indent=None`` writes compact JSON, for large files people do not read by eye.
+
+    Args:
+        path: the file.
+        data: what to write (JSON-able).
+        indent: the indent, or None for compact JSON.
     """
     temporary = path.with_suffix(path.suffix + ".tmp")
     separators = None if indent is not None else (",", ":")
@@ -20,7 +25,11 @@ def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
 
 
 class SnapshotLog:
-    """Appends each snapshot as one JSON line, flushed, so an interrupted run keeps what it logged."""
+    """Appends each snapshot as one JSON line, flushed, so an interrupted run keeps what it logged.
+
+    Args:
+        path: the JSON-lines file, appended to.
+    """
 
     def __init__(self, path: Path) -> None:
         self._file = open(path, "a", encoding="utf-8")

@@ -58,12 +58,29 @@ class RunError(RuntimeError):
 
 
 def new_run_id(seed: int) -> str:
+    """A run id that sorts by time and names the seed: ``<date>-<time>-seed<seed>-<4 hex digits>``.
+
+    Args:
+        seed: the episode's seed.
+
+    Returns:
+        The id.
+    """
     return f"{time.strftime('%Y%m%d-%H%M%S')}-seed{seed}-{os.urandom(2).hex()}"
 
 
 def run_episode(request: RunRequest, timer: StageTimer | None = None,
                 extra_sinks: list[SnapshotSink] | None = None) -> dict[str, Any]:
-    """Run one episode and return its result (also written to ``<out_root>/<run_id>/result.json``)."""
+    """Run one episode and return its result (also written to ``<out_root>/<run_id>/result.json``).
+
+    Args:
+        request: what to run: seed, settings, scene, where results go, which world.
+        timer: times the stages, if given.
+        extra_sinks: where else the tree's snapshots go.
+
+    Returns:
+        The result.
+    """
     run_id = request.run_id or new_run_id(request.seed)
     namespace = check_namespace(request.namespace or (DEFAULT_NAMESPACE if request.connect else f"homebot/{run_id}"))
     folder = request.out_root / run_id

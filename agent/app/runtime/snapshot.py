@@ -19,7 +19,14 @@ _SHORT = 72
 
 
 def short(value: Any) -> str:
-    """A one-line description of a blackboard value that stays readable for large objects."""
+    """A one-line description of a blackboard value that stays readable for large objects.
+
+    Args:
+        value: the value.
+
+    Returns:
+        The description.
+    """
     if isinstance(value, np.ndarray):
         return f"array{list(value.shape)} {value.dtype}"
     if isinstance(value, (list, tuple)) and len(value) > 4:
@@ -34,7 +41,18 @@ def short(value: Any) -> str:
 
 def snapshot(root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.SnapshotVisitor,
              tick: int, tick_ms: float, run: str) -> dict[str, Any]:
-    """The JSON-able snapshot of the tree just ticked (``visitor`` must have run on that tick)."""
+    """The JSON-able snapshot of the tree just ticked (``visitor`` must have run on that tick).
+
+    Args:
+        root: the tree.
+        visitor: the visitor that ran on the tick.
+        tick: the tick's number.
+        tick_ms: how long the tick took.
+        run: the run's id.
+
+    Returns:
+        The snapshot.
+    """
     behaviours = []
     for behaviour in _pre_order(root):
         behaviours.append({

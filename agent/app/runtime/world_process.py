@@ -18,7 +18,14 @@ class WorldStartError(RuntimeError):
 
 
 class WorldProcess:
-    """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file."""
+    """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file.
+
+    Args:
+        namespace: the bus namespace.
+        endpoint: the endpoint the world listens on.
+        camera: the head camera's settings.
+        log_path: the world's log file.
+    """
 
     def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path) -> None:
         self.log_path = log_path
@@ -36,7 +43,15 @@ class WorldProcess:
                                         stdin=subprocess.DEVNULL)
 
     def wait_ready(self, link: WorldLink, timeout_s: float) -> None:
-        """Wait for the world's liveliness token; raise WorldStartError if it exits or is too slow."""
+        """Wait for the world's liveliness token; raise WorldStartError if it exits or is too slow.
+
+        Args:
+            link: the link to the world.
+            timeout_s: how long to wait.
+
+        Raises:
+            WorldStartError: the process exited or was too slow.
+        """
         waited = 0.0
         while not link.liveness.wait_alive(0.2):
             waited += 0.2
@@ -46,11 +61,24 @@ class WorldProcess:
                 raise WorldStartError(f"the world process did not come up within {timeout_s:.0f} s:\n{self.log_tail()}")
 
     def log_tail(self, lines: int = 20) -> str:
+        """The last lines the world process wrote to its log.
+
+        Args:
+            lines: how many lines.
+
+        Returns:
+            The lines.
+        """
         self._log_file.flush()
         text = self.log_path.read_text(errors="replace").splitlines()
         return "\n".join(text[-lines:])
 
     def stop(self, timeout_s: float = 5.0) -> None:
+        """Stop the world process: SIGTERM, then SIGKILL if it does not exit in time.
+
+        Args:
+            timeout_s: how long it may take to exit.
+        """
         if self.process.poll() is None:
             self.process.terminate()
             try:
