@@ -227,7 +227,11 @@ class PortedSkill(py_trees.behaviour.Behaviour):
         return MappingProxyType(values), ""
 
     def bound_keys(self) -> frozenset[str]:
-        """The blackboard keys the ports are bound to."""
+        """The blackboard keys the ports are bound to, which a board's contract check allows.
+
+        Returns:
+            The keys, without their leading "/".
+        """
         return frozenset(self._keys.values())
 
     def input_problem(self) -> str:
