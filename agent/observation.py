@@ -12,6 +12,7 @@ import numpy as np
 
 from worlds.bus.codec import Message
 from agent.mapping.camera import Intrinsics
+from agent.pose import Pose2D
 
 
 class ObservationError(ValueError):
@@ -57,7 +58,7 @@ class Observation:
     labels: tuple[InstanceLabel, ...]
     intrinsics: Intrinsics
     camera_to_world: np.ndarray  # (4, 4), OpenCV camera frame
-    base_pose: tuple[float, float, float]  # x, y, yaw
+    base_pose: Pose2D
     render_ms: float = 0.0
 
     @classmethod
@@ -96,6 +97,7 @@ class Observation:
             raise ObservationError("observe reply: camera_pose must be a 4x4 rigid transform")
         if len(base_pose) != 3:
             raise ObservationError("observe reply: base_pose must be [x, y, yaw]")
+        base_pose = Pose2D(*base_pose)
         present = set(np.unique(seg).tolist()) - {-1}
         named = {label.id for label in labels}
         if named != present:

@@ -26,6 +26,7 @@ from agent.observation import Observation
 from agent.planning.frontier_plan import MovePlan
 from agent.planning.explore_method import ExploreStrategy
 from agent.planning.map_fields import MapFields
+from agent.pose import Pose2D
 from behaviours.episode_state import ApproachState, LookInsideState
 
 QUESTION = "question"
@@ -88,7 +89,7 @@ CONTRACT: dict[str, KeySpec] = {
                   ("EpisodeSetup", "ApproachStorage", "SelectFrontier"), ("MarkExplorationComplete", "Navigate"), "None"),
     FRONTIER_GOAL: KeySpec((np.ndarray, type(None)), "numpy (x, y) of the frontier headed for, or None", ("EpisodeSetup", "SelectFrontier",
                            "Navigate"), ("SelectFrontier",), "None"),
-    TRAJECTORY: KeySpec(list, "list[tuple[float, float, float]], base poses along the route driven",
+    TRAJECTORY: KeySpec(list, "list[agent.pose.Pose2D], base poses along the route driven",
                         ("EpisodeSetup", "Navigate", "LookInside"), ("EpisodeSetup",), "[start pose]"),
     EXPLORATION_COMPLETE: KeySpec(bool, "bool, no reachable frontier is left", ("EpisodeSetup", "MarkExplorationComplete"),
                                   ("ShouldStop", "Answer", "AnswerFallback"), "False"),
@@ -119,7 +120,7 @@ class EpisodeStart:
     question: str
     choices: list[str]
     budget: int
-    start_pose: tuple[float, float, float]
+    start_pose: Pose2D
     map_config: OccupancyConfig
     strategy: ExploreStrategy
     semantic_values: SemanticValueConfig

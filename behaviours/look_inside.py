@@ -59,6 +59,7 @@ from agent.perception.rooms import floor_points_by_kind, read_rooms
 from agent.planning.room_goal import RoomFloors, room_of_piece
 from agent.planning.route import Routes, routes_from
 from worlds.bus.link import WorldLink
+from agent.pose import Pose2D
 from agent.vlm.mosaic import side_by_side
 from behaviours.approach_storage import ApproachConfig
 from skills.arm.skill_plan import SkillPlanError
@@ -192,7 +193,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         if outcome.last is not None:
             self.blackboard.set(bb.OBSERVATION, outcome.last)
             if self.blackboard.exists(bb.TRAJECTORY):
-                self.blackboard.get(bb.TRAJECTORY).append(tuple(float(v) for v in outcome.last.base_pose))
+                self.blackboard.get(bb.TRAJECTORY).append(outcome.last.base_pose)
         return Status.SUCCESS if outcome.views else Status.FAILURE
 
     def terminate(self, new_status: Status) -> None:
@@ -230,7 +231,7 @@ class LookInside(py_trees.behaviour.Behaviour):
             if inst.hint in rooms:
                 state.rooms[inst.id] = rooms[inst.hint]
 
-    def _next_part(self, state: LookInsideState, kind: str, room: str | None, base_pose: tuple[float, float, float]) -> Instance | None:
+    def _next_part(self, state: LookInsideState, kind: str, room: str | None, base_pose: Pose2D) -> Instance | None:
         """The first unopened part with a handle (`_untried_part`) of the nearest piece of ``kind``
         within reach, pieces seen in a room of ``room``'s kind first and pieces seen in a room of
         another kind never."""

@@ -16,6 +16,7 @@ from behaviours import blackboard as bb
 from worlds.bus.codec import Message
 from worlds.bus.link import WorldLink
 from behaviours.world_command import WorldCommand
+from agent.pose import Pose2D
 
 
 class Navigate(WorldCommand):
@@ -51,7 +52,7 @@ class Navigate(WorldCommand):
         route = [trajectory[-1], *corners, pose] if trajectory else [*corners, pose]
         self.blackboard.get(bb.MAP).mark_driven(np.array([(float(p[0]), float(p[1])) for p in route]))
         trajectory.extend(corners)
-        trajectory.append(tuple(float(v) for v in pose))
+        trajectory.append(Pose2D.of(pose))
         contact = message.meta.get("contact")
         if contact:  # the way to the frontier is blocked: choose afresh rather than push on
             self.blackboard.set(bb.FRONTIER_GOAL, None)
@@ -66,10 +67,10 @@ class Navigate(WorldCommand):
         return Status.SUCCESS
 
 
-def _corners(driven: Any, heading: float) -> list[tuple[float, float, float]]:
+def _corners(driven: Any, heading: float) -> list[Pose2D]:
     """The inner points of a move_base reply's ``driven`` route, as poses at the heading the base
     drove with (it turns only at the end). Its first point is where the base stood, already on the
     trajectory; its last is the reply's ``base_pose``. A malformed route adds nothing."""
     if not (isinstance(driven, list) and all(isinstance(p, list) and len(p) == 2 for p in driven)):
         return []
-    return [(float(x), float(y), heading) for x, y in driven[1:-1]]
+    return [Pose2D(float(x), float(y), heading) for x, y in driven[1:-1]]

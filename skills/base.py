@@ -50,6 +50,7 @@ from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.context import SkillContext
 from skills.ports import Port, PortedSkill, input_port, output_port
 from skills.replies import arm_state, step_problem, thing_name
+from agent.pose import Pose2D
 
 log = logging.getLogger(__name__)
 
@@ -109,7 +110,7 @@ class ArmSkill(PortedSkill):
 
     # -- for subclasses ------------------------------------------------------------------------
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         """The steps of this skill.
 

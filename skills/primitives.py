@@ -16,6 +16,7 @@ import numpy as np
 
 from agent.perception.part_geometry import PartGeometry
 from agent.perception.part_motion import DEFAULT_AMOUNT
+from agent.pose import Pose2D
 from skills.base import ArmSkill, SkillResult
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError
@@ -43,7 +44,7 @@ class _OpenPart(ArmSkill):
         input_port("hold", bool, "end with the hand still on the handle, the part held open", default=False),
     )
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         _check_kind(inputs["geometry"], inputs["label"], self.kind, self.skill_name)
         amount = DEFAULT_AMOUNT[self.kind] if inputs["amount"] is None else inputs["amount"]
@@ -67,7 +68,7 @@ class _ClosePart(ArmSkill):
         input_port("held", bool, "the hand already holds the handle (an open bound with hold)", default=False),
     )
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         geometry = inputs["geometry"]
         _check_kind(geometry, inputs["label"], self.kind, self.skill_name)
@@ -126,7 +127,7 @@ class _Pick(ArmSkill):
                    "destination (x, y, z)"),
     )
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_pick(q, base_pose, inputs["object_point"], inputs["object_extent"], inputs["place_point"],
                                  surface_z=inputs["surface_z"], skill=self.skill_name)
@@ -159,7 +160,7 @@ class LookAt(ArmSkill):
         input_port("pitch_deg", float, "the camera's pitch below level (default: the planner's)", default=None),
     )
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_look(q, base_pose, inputs["look_point"], standoff_m=inputs["standoff_m"],
                                  pitch_deg=inputs["pitch_deg"], surface_z=inputs["surface_z"], skill=self.skill_name)

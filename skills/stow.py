@@ -17,6 +17,7 @@ import numpy as np
 from skills.base import ArmSkill
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan
+from agent.pose import Pose2D
 
 
 class Stow(ArmSkill):
@@ -26,6 +27,6 @@ class Stow(ArmSkill):
 
     skill_name = "stow"
 
-    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: tuple[float, float, float],
+    def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_stow(q, base_pose, surface_z=inputs["surface_z"], skill=self.skill_name)

@@ -25,6 +25,7 @@ from matplotlib.patches import Patch, Polygon  # noqa: E402
 from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar  # noqa: E402
 
 from agent.mapping.occupancy import ExplorationMap  # noqa: E402
+from agent.pose import Pose2D
 
 UNKNOWN, FREE, EXPLORED, OCCUPIED = (0.80, 0.80, 0.80), (0.97, 0.97, 0.97), (0.74, 0.88, 0.74), (0.20, 0.22, 0.28)
 ROUTE_CMAP = plt.get_cmap("Reds")
@@ -33,7 +34,7 @@ START_COLOUR = "#2c7bb6"
 END_COLOUR = "#8e0e14"
 
 
-def save_map_png(path: Path, world_map: ExplorationMap, trajectory: list[tuple[float, float, float]],
+def save_map_png(path: Path, world_map: ExplorationMap, trajectory: list[Pose2D],
                  result: dict[str, Any]) -> None:
     """Draw the run's map to ``path``. ``result`` is the run's result (question, answer, truth,
     status, steps) with the world's episode report under ``evaluation``; where that is None the
@@ -124,7 +125,7 @@ def _target_name(target: dict[str, Any]) -> str:
     return name if len(things) == 1 else f"{len(things)} × {name}"
 
 
-def _draw_route(ax: Axes, trajectory: list[tuple[float, float, float]]) -> list[Any]:
+def _draw_route(ax: Axes, trajectory: list[Pose2D]) -> list[Any]:
     """The driven route, light at the start and dark at the end, with the start and end poses."""
     if not trajectory:
         return []

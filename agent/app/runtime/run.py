@@ -25,6 +25,7 @@ from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSin
 from agent.app.runtime.plots import save_map_png
 from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
 from agent.app.runtime.record import SnapshotLog, write_json_atomic
+from agent.pose import Pose2D
 from agent.timing import StageTimer
 from worlds.bus.link import WorldLink
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
@@ -140,7 +141,7 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
               extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]]
               ) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
-    start = tuple(float(v) for v in reset_meta["base_pose"])
+    start = Pose2D.of(reset_meta["base_pose"])
     writer = bb.seed_board(bb.EpisodeStart(scenario["question"], list(scenario["choices"]),
                                            config.episode.budget or int(scenario["budget"]), start, config.map,
                                            config.explore.strategy, config.semantic_values))
