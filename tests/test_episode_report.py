@@ -26,7 +26,7 @@ from worlds.home import HomeSpec, generate_home
 from worlds.robot import CameraConfig
 from worlds.route import driven_route
 from worlds.scenario import Scenario, make_scenario
-from worlds.storage import home_storage
+from worlds.storage_placement import home_storage
 from worlds.things import Furniture
 
 #: Seeds whose scenario asks about storage: seed 3's hidden-evidence one, seed 16's "Is the fridge in

@@ -24,7 +24,8 @@ from agent.perception.part_geometry import handle_geometry
 from worlds.camera import render
 from worlds.robot import CameraConfig
 from worlds.scene import StorageBody, add_storage
-from worlds.storage import StoragePlacement, storage_model
+from worlds.storage import storage_model
+from worlds.storage_placement import StoragePlacement
 from worlds.urdf import handle_boxes, joint_frame, part_transform
 
 CAMERA = CameraConfig(width=320, height=240, hfov_deg=70.0, mount_height_m=1.1, pitch_deg=-30.0)

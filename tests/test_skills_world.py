@@ -34,7 +34,7 @@ from skills.running import run_to_end
 from skills.arm.idle_space import idle_spot
 from skills.arm.stand import stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
-from worlds.storage import StoragePlacement
+from worlds.storage_placement import StoragePlacement
 from worlds.tabletop import tabletop_variant
 from worlds.tabletop_scene import TabletopObject, TabletopScene
 from worlds.urdf import handle_boxes

@@ -12,7 +12,8 @@ import pytest
 from worlds.camera import render
 from worlds.robot import CameraConfig
 from worlds.scene import add_box, add_storage, link_indices, load_storage, urdf_file
-from worlds.storage import HANDLE_REACH, MODELS, Box, StorageModel, StoragePlacement, storage_model
+from worlds.storage import HANDLE_REACH, MODELS, Box, StorageModel, storage_model
+from worlds.storage_placement import StoragePlacement
 from worlds.urdf import handle_boxes, part_transform, storage_urdf
 
 SEEDS = (0, 1, 2, 3)

@@ -12,7 +12,7 @@ from worlds.drive import MAX_STEP
 from worlds.robot import ROBOT_RADIUS, CameraConfig
 from worlds.sight import visible_facts
 from worlds.sim import World
-from worlds.storage import home_part_labels, home_storage
+from worlds.storage_placement import home_part_labels, home_storage
 from worlds.things import point_rect_distance
 
 

@@ -22,7 +22,7 @@ from worlds.freespace import free_space
 from worlds.fronts import stand_point, storage_obstacles
 from worlds.furnish import DOOR_CLEARANCE, STAND, clear_zone, furnish_room
 from worlds.robot import ROBOT_RADIUS
-from worlds.storage import home_part_labels
+from worlds.storage_placement import home_part_labels
 from worlds.things import Doorway, Furniture, Item, Label, Rect, Room, Wall
 from worlds.vocabulary import COLOURS, room_name
 
@@ -54,7 +54,7 @@ _ATTEMPTS = 300
 @dataclass(frozen=True)
 class HomeSpec:
     """Everything in one home. Instance ids run 1..N over rooms (floors), walls, furniture and
-    objects; storage parts follow (worlds.storage.home_storage), two ids per part and its handle."""
+    objects; storage parts follow (worlds.storage_placement.home_storage), two ids per part and its handle."""
 
     seed: int
     rooms: tuple[Room, ...]

@@ -22,7 +22,8 @@ import pybullet as p
 
 from worlds.appearance import Visual, furniture_visuals, item_visuals
 from worlds.camera import SegLabels
-from worlds.storage import StorageModel, StoragePlacement, handle_colour, home_storage, part_labels
+from worlds.storage import StorageModel
+from worlds.storage_placement import StoragePlacement, handle_colour, home_storage, part_labels
 from worlds.things import Item, Label
 from worlds.urdf import HANDLE_RGBA, friction, storage_urdf
 from worlds.vocabulary import COLOURS

@@ -23,7 +23,8 @@ import numpy as np
 
 from worlds.camera import SegLabels
 from worlds.scene import add_boxes, add_shape, add_storage
-from worlds.storage import HANDLE_REACH, StoragePlacement, storage_model
+from worlds.storage import HANDLE_REACH, storage_model
+from worlds.storage_placement import StoragePlacement
 from worlds.tabletop_scene import SHELL_WALL, TABLE_HEIGHT, TABLE_ID, TabletopObject, TabletopScene, half_extents
 from worlds.things import Rect, rects_overlap
 from worlds.urdf import sweep_points

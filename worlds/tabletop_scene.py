@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from worlds.storage import StoragePlacement, part_labels
+from worlds.storage_placement import StoragePlacement, part_labels
 from worlds.things import Label, Rect
 from worlds.urdf import sweep_points
 

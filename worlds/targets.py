@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from worlds.home import HomeSpec
-from worlds.storage import home_storage
+from worlds.storage_placement import home_storage
 from worlds.things import Furniture, Item, Room
 
 #: The slots matched against objects and furniture when no container or appliance is named.
