@@ -121,6 +121,9 @@ class Robot:
 
         Returns:
             The memory's detections.
+
+        Raises:
+            QueryFailed: the world sent no frame.
         """
         body = self.body
         first = body.home is None

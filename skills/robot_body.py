@@ -73,6 +73,10 @@ class RobotBody:
 
         Returns:
             The skill's result.
+
+        Raises:
+            skills.registry.SkillError: no skill is registered as ``name``, or it cannot be loaded.
+            skills.ports.PortError: a port bound wrongly.
         """
         began = time.perf_counter()
         skill = self.skills.create(name, self.context, bindings)
@@ -93,6 +97,9 @@ class RobotBody:
 
         Returns:
             The frame.
+
+        Raises:
+            QueryFailed: the world sent no frame.
         """
         observation = self.frame(camera)
         self.memory.integrate(observation)
@@ -107,6 +114,9 @@ class RobotBody:
 
         Returns:
             The frame.
+
+        Raises:
+            QueryFailed: the world sent no frame.
         """
         observation = Observation.from_message(self.link.call("observe", {"camera": camera}))
         self.pose = Pose2D.of(observation.base_pose)

@@ -4,10 +4,9 @@ A public function or method (its name and its class's name start with no ``_``) 
 parameter besides ``self``/``cls`` has a docstring with an ``Args:`` section; one annotated to return
 something other than None has ``Returns:`` (``Yields:`` for a generator, or ``Returns:`` for
 the context manager it makes). Left out: dunders, properties,
-the py_trees callbacks whose meaning py_trees defines (`PY_TREES_CALLBACKS`), methods that override
+the py_trees callbacks whose meaning py_trees defines (`PY_TREES_CALLBACKS`), and methods that override
 one of a base class in the four packages or implement one of a `Protocol` the module defines or imports
-(the base or the protocol documents them), and the modules of `NOT_YET`. A context manager's
-``Iterator[None]`` returns nothing.
+(the base or the protocol documents them). A context manager's ``Iterator[None]`` returns nothing.
 """
 
 from __future__ import annotations
@@ -20,17 +19,11 @@ ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("agent", "behaviours", "skills", "worlds")
 #: Behaviour callbacks py_trees documents; a leaf's one-line docstring says what it does there.
 PY_TREES_CALLBACKS = frozenset({"setup", "initialise", "update", "terminate", "shutdown"})
-#: Modules not yet held to this (paths relative to the root, shell patterns): the scene-graph executor
-#: is being split. Empty this set once its modules are documented.
-NOT_YET = frozenset({"skills/robot.py", "skills/robot_*.py"})
 
 
 def _modules() -> Iterator[Path]:
     for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            relative = path.relative_to(ROOT)
-            if not any(relative.match(pattern) for pattern in NOT_YET):
-                yield path
+        yield from sorted((ROOT / package).rglob("*.py"))
 
 
 def _is_property(node: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
