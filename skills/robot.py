@@ -131,7 +131,7 @@ class Robot:
             try:
                 self.return_home()
             except SkillPlanError as error:  # look from where it stands rather than not at all
-                log.warning("observe: looking from where the robot stands: %s", error)
+                log.info("observe: looking from where the robot stands: %s", error)
         head = body.frame("head")
         if first:
             body.home = body.pose
