@@ -36,7 +36,8 @@ def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[
     timer = StageTimer()
     home = generate_home(seed, area_m2=area_m2)
     with tempfile.TemporaryDirectory(prefix="homebot-bench-") as scratch:
-        request = RunRequest(seed=seed, config=config, out_root=Path(scratch), scene=dump_spec(home), save_map=False)
+        request = RunRequest(seed=seed, config=config, out_root=Path(scratch), scene=dump_spec(home), save_map=False,
+                             record=False)
         result = run_episode(request, timer=timer)
     summary = timer.summary()
     steps = max(1, result.get("steps", 0))

@@ -13,6 +13,9 @@ from pathlib import Path
 
 from agent.app.cli.options import Commands, add_suite_run_options, suite_settings
 
+RECORD_HELP = ("keep each episode's run folder with its Rerun recording under OUT/recordings "
+               "(homebot replay opens one); without it evaluation episodes record nothing")
+
 
 def add_command(commands: Commands) -> None:
     """Add ``eval`` and its five evaluations with their options.
@@ -26,10 +29,12 @@ def add_command(commands: Commands) -> None:
     add_suite_run_options(explore, "runs/eval-explore", "results, curves.csv and curves.png go here; reruns resume")
     explore.add_argument("--methods", default="fbe,semantic,semantic-no-lsv,semantic-no-gsv",
                          help="comma separated (default: all four)")
+    explore.add_argument("--record", action="store_true", help=RECORD_HELP)
     explore.set_defaults(handler=_eval_explore)
     stop = evaluations.add_parser("stop", help="stopping rules: CP against Entropy and Relevance (Fig. 9)")
     add_suite_run_options(stop, "runs/eval-stop", "episodes, CSVs and stop-curves.png go here; reruns resume")
     stop.add_argument("--calibration", type=Path, required=True, help="a calibration file (homebot calibrate)")
+    stop.add_argument("--record", action="store_true", help=RECORD_HELP)
     stop.set_defaults(handler=_eval_stop)
 
     interactive = evaluations.add_parser("interactive", help="interactive exploration: RoboEXP's Table I")
@@ -44,6 +49,7 @@ def add_command(commands: Commands) -> None:
                              help="scenes explored at once, each in its own process and world (default 1)")
     interactive.add_argument("--out", type=Path, default=Path("runs/eval-interactive"),
                              help="results go here; reruns resume")
+    interactive.add_argument("--record", action="store_true", help=RECORD_HELP.replace("episode", "scene"))
     interactive.set_defaults(handler=_eval_interactive)
 
     coverage = evaluations.add_parser("coverage", help="learning-augmented exploration: coverage in 500 steps "
@@ -66,7 +72,7 @@ def add_command(commands: Commands) -> None:
 
 
 def _eval_explore(args: argparse.Namespace) -> int:
-    from agent.app.eval.explore import evaluate_explore
+    from agent.app.eval.method_comparison import evaluate_explore
     from worlds.suite import SuiteError
 
     config = suite_settings(args)
@@ -75,7 +81,7 @@ def _eval_explore(args: argparse.Namespace) -> int:
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
         report = evaluate_explore(args.suite, methods, args.out, args.workers, config, args.limit,
-                                  args.world_addresses)
+                                  args.world_addresses, _recordings(args))
     except (ValueError, SuiteError, OSError) as error:
         print(f"homebot eval explore: {error}", file=sys.stderr)
         return 2
@@ -104,7 +110,7 @@ def _eval_stop(args: argparse.Namespace) -> int:
         return 2
     try:
         report = evaluate_stop(args.suite, args.calibration, args.out, args.workers, config, args.limit,
-                               args.world_addresses)
+                               args.world_addresses, _recordings(args))
     except (CalibrationError, SuiteError, ValueError, OSError) as error:
         print(f"homebot eval stop: {error}", file=sys.stderr)
         return 2
@@ -131,7 +137,8 @@ def _eval_interactive(args: argparse.Namespace) -> int:
 
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
     try:
-        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress, args.workers)
+        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress, args.workers,
+                                      _recordings(args))
     except ValueError as error:
         print(f"homebot eval interactive: {error}", file=sys.stderr)
         return 2
@@ -172,3 +179,8 @@ def _eval_coverage(args: argparse.Namespace) -> int:
     print(text)
     print(f"results {report['results']}, curves {figure}")
     return 0
+
+
+def _recordings(args: argparse.Namespace) -> Path | None:
+    """Where ``--record`` keeps the episodes' run folders (``OUT/recordings``), or None without it."""
+    return args.out / "recordings" if args.record else None

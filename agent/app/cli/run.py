@@ -5,9 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agent.app.cli.options import Commands, add_config_options, load_settings
+
+if TYPE_CHECKING:
+    from agent.app.runtime.viewer import LiveViewer
 
 
 def add_command(commands: Commands) -> None:
@@ -31,6 +34,9 @@ def add_command(commands: Commands) -> None:
                      help="stopping rule (default cp: conformal prediction; same as --set stop.rule=…)")
     run.add_argument("--epsilon", type=float,
                      help="accepted miscoverage ε of the conformal set (default 0.3; --set stop.epsilon=…)")
+    run.add_argument("--viewer", action="store_true",
+                     help="show the episode's recording live in the Rerun viewer: spawned where a display "
+                          "exists, else a web viewer served on a local address (printed)")
     run.set_defaults(handler=_run)
 
 
@@ -59,7 +65,7 @@ def _run(args: argparse.Namespace) -> int:
     args.set.extend(shortcut_overrides(args))
     config = load_settings(args)
     request = RunRequest(seed=seed, config=config, out_root=args.out, connect=args.connect,
-                         namespace=args.namespace, scenario=scenario)
+                         namespace=args.namespace, scenario=scenario, viewer=_started_viewer(args.viewer))
     print(f"homebot run: {what}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
           f"watch with `homebot watch --connect {config.bus.listen[0]}`", flush=True)
     try:
@@ -75,6 +81,18 @@ def _run(args: argparse.Namespace) -> int:
         print(f"episode failed: {result['reason']}", file=sys.stderr)
     print(f"run folder: {result['folder']}")
     return 0 if result["status"] == "answered" else 1
+
+
+def _started_viewer(wanted: bool) -> LiveViewer | None:
+    """The live viewer ``--viewer`` asks for, started, its address printed; None without it."""
+    from agent.app.runtime.viewer import LiveViewer
+
+    if not wanted:
+        return None
+    viewer = LiveViewer.for_this_machine()
+    viewer.start()
+    print(f"homebot run: {viewer.describe()}", flush=True)
+    return viewer
 
 
 def _episode_choice(args: argparse.Namespace) -> tuple[int, dict[str, Any] | None, str]:

@@ -55,7 +55,7 @@ def episodes_path(out: Path) -> Path:
 
 
 def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: Config,
-                    worlds: list[WorldAddress] | None = None) -> list[dict[str, Any]]:
+                    worlds: list[WorldAddress] | None = None, recordings: Path | None = None) -> list[dict[str, Any]]:
     """Run what is missing from ``results_path`` (refusing to mix policies) and return every job's result.
 
     Args:
@@ -64,12 +64,13 @@ def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: C
         workers: episodes run at once.
         config: the settings.
         worlds: the worlds to run in (started here when None).
+        recordings: where to keep each episode's run folder with its Rerun recording (None: none kept).
 
     Returns:
         The results, in job order.
     """
     _check_same_policy(results_path.with_suffix(".json"), config)
-    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds)
+    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings)
     return results_for(jobs, results_path)
 
 

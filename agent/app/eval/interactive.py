@@ -30,6 +30,7 @@ from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene
 from agent.app.eval.runner import read_results
+from agent.app.eval.tabletop_recording import record_graph
 from agent.app.runtime.pool import as_finished
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
 
@@ -39,12 +40,13 @@ PAPER_SUCCESS = {"drawer-only": 0.9, "door-only": 0.9, "drawer-door": 0.7, "recu
 COLUMNS = ("success", "object_recovery", "state_recovered", "unexplored_space", "graph_edit_distance")
 
 
-def run_symbolic(task: str, seed: int) -> dict[str, Any]:
+def run_symbolic(task: str, seed: int, recording: Path | None = None) -> dict[str, Any]:
     """Explore one tabletop variant with the symbolic executor; its Table I metrics.
 
     Args:
         task: the tabletop task.
         seed: the variant's seed.
+        recording: a folder to write the explored graph's Rerun recording into, or None.
 
     Returns:
         The metrics, with the seconds taken.
@@ -53,19 +55,22 @@ def run_symbolic(task: str, seed: int) -> dict[str, Any]:
     world = SymbolicScene.from_tabletop(scene)
     started = time.monotonic()
     result = explore(world, RuleDecisionModule(), world)
+    if recording is not None:
+        record_graph(recording, f"{task}-{seed}-symbolic", result.graph)
     metrics = episode_metrics(result.graph, from_ground_truth(scene.ground_truth_acsg()), world.start_positions(),
                               world.positions(), world.start_part_states(), world.part_states())
     return {**asdict(metrics), "actions": len(result.steps()), "returned_to_start": result.returned_to_start,
             "seconds": round(time.monotonic() - started, 3)}
 
 
-def run_scene(executor: str, task: str, seed: int) -> dict[str, Any]:
+def run_scene(executor: str, task: str, seed: int, recordings: Path | None = None) -> dict[str, Any]:
     """One result row: the scene explored by ``executor``.
 
     Args:
         executor: "robot" or "symbolic".
         task: the tabletop task.
         seed: the variant's seed.
+        recordings: where to keep each scene's recording (``<recordings>/<task>-<seed>-<executor>/``), or None.
 
     Returns:
         The row.
@@ -73,16 +78,18 @@ def run_scene(executor: str, task: str, seed: int) -> dict[str, Any]:
     if executor == "robot":
         from agent.app.eval.robot_tabletop import run_robot  # PyBullet and the arm only when asked for
 
-        metrics = run_robot(task, seed)
+    folder = recordings / f"{task}-{seed}-{executor}" if recordings is not None else None
+    if executor == "robot":
+        metrics = run_robot(task, seed, folder)
     else:
-        metrics = run_symbolic(task, seed)
+        metrics = run_symbolic(task, seed, folder)
     return {"task": task, "seed": seed, "executor": executor, **metrics}
 
 
 def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: int = VARIANTS,
                          executor: str = "symbolic",
                          progress: Callable[[int, int, dict[str, Any]], None] | None = None,
-                         workers: int = 1) -> dict[str, Any]:
+                         workers: int = 1, recordings: Path | None = None) -> dict[str, Any]:
     """Run the scenes not yet in ``<out_dir>/interactive-results.jsonl``; return the per-task table.
 
     Args:
@@ -92,6 +99,7 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
         executor: "symbolic" or "robot".
         progress: called with (done, total, row) after each scene, if given.
         workers: scenes run at once.
+        recordings: where to keep each scene's Rerun recording of its explored graph, or None.
 
     Returns:
         The table, the results file and the scene count.
@@ -114,7 +122,7 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
     done = {(r["task"], r["seed"], r["executor"]) for r in read_results(path)}
     todo = [(task, seed) for task in tasks for seed in range(variants) if (task, seed, executor) not in done]
     with open(path, "a", encoding="utf-8") as out:
-        calls = [(executor, task, seed) for task, seed in todo]  # scenes in processes of their own
+        calls = [(executor, task, seed, recordings) for task, seed in todo]  # scenes in processes of their own
         for number, (_, row) in enumerate(as_finished(run_scene, calls, workers), start=1):
             out.write(json.dumps(row) + "\n")
             out.flush()

@@ -45,7 +45,8 @@ def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job
 
 
 def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: int, config: Config,
-                     limit: int | None = None, worlds: list[WorldAddress] | None = None) -> dict[str, Any]:
+                     limit: int | None = None, worlds: list[WorldAddress] | None = None,
+                     recordings: Path | None = None) -> dict[str, Any]:
     """Run what is missing, then write ``curves.csv`` and ``curves.png``; return the curves.
 
     Args:
@@ -56,13 +57,14 @@ def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: in
         config: the settings.
         limit: the most entries used (all when None).
         worlds: the worlds to run in (started here when None).
+        recordings: where to keep each episode's run folder with its Rerun recording (None: none kept).
 
     Returns:
         Every panel's curves by method, the τ grid, the episodes counted, the failures, the results file.
     """
     jobs = explore_jobs(suite, methods, limit)
     results_path = out_dir / "explore-results.jsonl"
-    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds)
+    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings)
     results = results_for(jobs, results_path)
     for result in results:
         result["method"] = result["variant"]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,6 +27,7 @@ from agent.acsg.metrics import episode_metrics
 from skills.robot import Robot
 from agent.perception.memory import InstanceMemory
 from agent.app.runtime.local_world import local_world
+from agent.app.eval.tabletop_recording import record_graph
 from worlds.bus.link import WorldLink
 from worlds.facts import CLOSED_SHARE
 from worlds.sim import World
@@ -37,12 +39,13 @@ from worlds.tabletop_scene import TabletopScene
 PUT_BACK_M = 0.02
 
 
-def run_robot(task: str, seed: int) -> dict[str, Any]:
+def run_robot(task: str, seed: int, recording: Path | None = None) -> dict[str, Any]:
     """Explore one tabletop variant with the robot; its Table I metrics and the skills' figures.
 
     Args:
         task: the tabletop task.
         seed: the variant's seed.
+        recording: a folder to write the explored graph's Rerun recording into, or None.
 
     Returns:
         The metrics and figures.
@@ -60,6 +63,8 @@ def run_robot(task: str, seed: int) -> dict[str, Any]:
         finally:
             link.close()
     explored = in_world_ids(result.graph, robot.memory)
+    if recording is not None:
+        record_graph(recording, f"{task}-{seed}-robot", explored)
     metrics = episode_metrics(explored, from_ground_truth(scene.ground_truth_acsg()), start_positions,
                               final_positions, start_states, final_states, tolerance_m=PUT_BACK_M)
     skills = robot.skill_times

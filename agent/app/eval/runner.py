@@ -105,7 +105,7 @@ def read_results(path: Path) -> list[dict[str, Any]]:
 
 def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Config,
              progress: Callable[[int, int, dict[str, Any]], None] | None = None,
-             worlds: list[WorldAddress] | None = None) -> int:
+             worlds: list[WorldAddress] | None = None, recordings: Path | None = None) -> int:
     """Run the jobs not yet in ``results_path`` in worker processes, appending each result as it ends.
 
     Args:
@@ -115,6 +115,8 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         base_config: the settings every job's overrides apply to.
         progress: called after each episode with (done, of how many, its result).
         worlds: running worlds to join instead, one worker each.
+        recordings: where to keep each episode's run folder with its Rerun recording
+            (``<recordings>/<id>-<variant>/recording.rrd``); None keeps no recording.
 
     Returns:
         How many jobs ran now (0 when the file held them all).
@@ -133,7 +135,7 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         max_workers=len(worlds) if worlds else workers, mp_context=context, initializer=_start_worker_world,
         initargs=(base_config, addresses if worlds else None),
     ) as pool:
-        pending = {pool.submit(_run_job, job, base_config) for job in todo}
+        pending = {pool.submit(_run_job, job, base_config, recordings) for job in todo}
         finished = 0
         while pending:
             complete, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -228,16 +230,17 @@ def _start_worker_world(config: Config, addresses: Any | None) -> None:
     _worker_world = WorkerWorld(namespace, endpoint, scratch)
 
 
-def _run_job(job: Job, base_config: Config) -> dict[str, Any]:
-    """One episode in this worker's world; any failure is a result with its reason, never a crash."""
+def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> dict[str, Any]:
+    """One episode in this worker's world, its run folder (and recording) kept under ``recordings``
+    when given; any failure is a result with its reason, never a crash."""
     started = time.monotonic()
     config = load_config(overrides=list(job.overrides), base=base_config)
     world = _worker_world
     if world is None:
         raise RuntimeError("_run_job runs in a worker of run_jobs, whose initializer gives it its world")
-    request = RunRequest(seed=job.seed, config=config, out_root=world.scratch, connect=world.endpoint,
+    request = RunRequest(seed=job.seed, config=config, out_root=recordings or world.scratch, connect=world.endpoint,
                          namespace=world.namespace, run_id=f"{job.entry_id}-{job.variant}",
-                         scenario=job.scenario, save_map=False)
+                         scenario=job.scenario, save_map=False, record=recordings is not None)
     try:
         result = run_episode(request)
     except RunError as error:

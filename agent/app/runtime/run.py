@@ -25,6 +25,8 @@ from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSin
 from agent.app.runtime.plots import save_map_png
 from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
 from agent.app.runtime.record import SnapshotLog, write_json_atomic
+from agent.app.runtime.recording import Recorder
+from agent.app.runtime.viewer import RECORDING_FILE, LiveViewer
 from agent.pose import Pose2D
 from agent.timing import StageTimer
 from worlds.bus.link import WorldLink
@@ -52,6 +54,8 @@ class RunRequest:
     scenario: dict[str, Any] | None = None  # a suite's scenario; None lets the world draw one from the seed
     scene: dict[str, Any] | None = None  # a scene spec; None lets the world generate the seed's home
     save_map: bool = True  # the map picture costs ~0.3 s; evaluations of many episodes skip it
+    record: bool = True  # write recording.rrd (agent.app.runtime.recording); evaluations keep none unless asked
+    viewer: LiveViewer | None = None  # a started viewer the recording streams to as it is written
 
 
 class RunError(RuntimeError):
@@ -111,8 +115,9 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         reset = link.call("reset", reset_request, timeout_s=config.bus.world_start_timeout_s)
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
+        recorder = _recorder(request, folder / RECORDING_FILE, run_id)
         outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, stopping, link,
-                                                   session, keys, folder, timer, extra_sinks or [], plugged)
+                                                   session, keys, folder, timer, extra_sinks or [], plugged, recorder)
         evaluation = _episode_report(link, config.bus.query_timeout_s)
     except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError, PlugError) as error:
         reason = f"the episode could not start: {error}"
@@ -138,8 +143,8 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
 def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any], config: Config,
               vlm: VisionLanguageModel, stopping: StoppingRule,
               link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
-              extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]]
-              ) -> tuple[EpisodeOutcome, ExplorationMap, list]:
+              extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]],
+              recorder: Recorder | None = None) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
     start = Pose2D.of(reset_meta["base_pose"])
     writer = bb.seed_board(bb.EpisodeStart(scenario["question"], list(scenario["choices"]),
@@ -158,10 +163,14 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     plug_into(root, plugged)
     runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds,
                            config.episode.tick_period_s, timer)
+    if recorder is not None:
+        runner.tree.add_post_tick_handler(recorder.after_tick)
     try:
         outcome = runner.run()
     finally:
         snapshot_log.close()
+        if recorder is not None:
+            recorder.close()
     log_of_steps = writer.get(bb.ANSWER_LOG)
     outcome.extra["steps"] = len(log_of_steps)
     outcome.extra["step_scores"] = [s.to_record() for s in log_of_steps.steps]
@@ -181,6 +190,18 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     # interpreter exit, where open3d reports any device memory still held as a leak and fails.
     py_trees.blackboard.Blackboard.clear()
     return outcome, world_map, trajectory
+
+
+def _recorder(request: RunRequest, path: Path, run_id: str) -> Recorder | None:
+    """The episode's recorder when it records; None when it does not, or when the recording cannot
+    be opened (that is logged: no recording ends an episode)."""
+    if not request.record:
+        return None
+    try:
+        return Recorder(path, run_id, request.viewer)
+    except Exception:
+        log.exception("no recording of this episode: %s could not be opened", path)
+        return None
 
 
 def _episode_report(link: WorldLink, timeout_s: float) -> dict[str, Any] | None:
