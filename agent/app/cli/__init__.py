@@ -9,6 +9,7 @@ import sys
 
 from worlds.bus.session import EndpointError
 from agent.app.cli import bench, calibrate, eval, replay, run, skills, suite, watch
+from agent.app.cli.options import INTERRUPTED
 from agent.app.config import ConfigError
 
 #: Commands with a parser of their own, handed the words after their name: command -> (the module
@@ -29,20 +30,24 @@ def main(argv: list[str] | None = None) -> int:
         argv: the words after ``homebot`` (default: the process's arguments).
 
     Returns:
-        The exit code: 0 done, 1 the command failed, 2 bad arguments or settings (each command
-        says more in its help).
+        The exit code: 0 done, 1 the command failed, 2 bad arguments or settings, 130 ended by
+        Ctrl-C (what finished is kept; each command says more in its help).
     """
     argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] and argv[0] in DELEGATED:
-        return importlib.import_module(DELEGATED[argv[0]][0]).main(argv[1:])
-    args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
     try:
+        if argv[:1] and argv[0] in DELEGATED:
+            return importlib.import_module(DELEGATED[argv[0]][0]).main(argv[1:])
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
+                            format="%(levelname)s %(name)s: %(message)s")
         return args.handler(args)
     except (ConfigError, EndpointError) as error:
         print(f"homebot: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        command = " ".join(word for word in argv[:2] if not word.startswith("-"))
+        print(f"\nhomebot {command}: interrupted (Ctrl-C); what finished is kept", file=sys.stderr)
+        return INTERRUPTED
 
 
 def build_parser() -> argparse.ArgumentParser:

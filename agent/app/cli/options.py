@@ -15,6 +15,9 @@ from agent.app.config import Config, load_config
 
 DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"
 
+#: The exit code of a command ended by Ctrl-C (SIGINT): 128 + the signal's number, as shells report it.
+INTERRUPTED = 130
+
 #: The sub-parser collection ``add_subparsers`` returns, to which each command adds its parser.
 Commands = argparse._SubParsersAction
 

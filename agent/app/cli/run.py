@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from agent.app.cli.options import Commands, add_config_options, load_settings
+from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, load_settings
 
 if TYPE_CHECKING:
     from agent.app.runtime.viewer import LiveViewer
@@ -54,7 +54,7 @@ def shortcut_overrides(args: argparse.Namespace) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from agent.app.runtime.run import RunError, RunRequest, run_episode
+    from agent.app.runtime.run import RunError, RunRequest, new_run_id, run_episode
     from agent.app.runtime.progress import StepPrinter
 
     try:
@@ -65,14 +65,18 @@ def _run(args: argparse.Namespace) -> int:
     args.set.extend(shortcut_overrides(args))
     config = load_settings(args)
     request = RunRequest(seed=seed, config=config, out_root=args.out, connect=args.connect,
-                         namespace=args.namespace, scenario=scenario, viewer=_started_viewer(args.viewer))
+                         namespace=args.namespace, scenario=scenario, run_id=new_run_id(seed),
+                         viewer=_started_viewer(args.viewer))
     print(f"homebot run: {what}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
-          f"watch with `homebot watch --connect {config.bus.listen[0]}`", flush=True)
+          f"watch with `homebot watch --run {request.run_id}`", flush=True)
     try:
         result = run_episode(request, extra_sinks=[StepPrinter(sys.stdout)])
     except RunError as error:
         print(f"homebot run: {error}", file=sys.stderr)
         return 1
+    if result["status"] == "interrupted":
+        print(f"homebot run: {result['reason']}; run folder: {result['folder']}", file=sys.stderr)
+        return INTERRUPTED
     verdict = "correct" if result["correct"] else "wrong"
     if result["status"] == "answered":
         print(f"answer {result['answer']} ({result['answer_text']}); truth {result['ground_truth']} "

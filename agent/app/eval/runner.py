@@ -27,6 +27,7 @@ from typing import Any
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
+from agent.app.runtime.pool import quiet_worker, stop_workers
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from agent.app.runtime.world_process import WorldProcess
 
@@ -137,15 +138,19 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
     ) as pool:
         pending = {pool.submit(_run_job, job, base_config, recordings) for job in todo}
         finished = 0
-        while pending:
-            complete, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in complete:
-                result = future.result()
-                out.write(json.dumps(result, ensure_ascii=False) + "\n")
-                out.flush()
-                finished += 1
-                if progress:
-                    progress(finished, len(todo), result)
+        try:
+            while pending:
+                complete, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in complete:
+                    result = future.result()
+                    out.write(json.dumps(result, ensure_ascii=False) + "\n")
+                    out.flush()
+                    finished += 1
+                    if progress:
+                        progress(finished, len(todo), result)
+        except KeyboardInterrupt:
+            stop_workers(pool)
+            raise
     return len(todo)
 
 
@@ -217,6 +222,7 @@ def _start_worker_world(config: Config, addresses: Any | None) -> None:
     """Worker initialiser: join the next listed world, or start a world child process for this
     worker that stops when it exits; either becomes this process's `WorkerWorld`."""
     global _worker_world
+    quiet_worker()
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)
     scratch = Path(tempfile.mkdtemp(prefix="homebot-eval-world-"))
     if addresses is not None:

@@ -29,7 +29,7 @@ SnapshotSink = Callable[[dict[str, Any]], None]
 class EpisodeOutcome:
     """How an episode ended: answered (with the answer) or failed (with the reason)."""
 
-    status: str  # "answered" or "failed"
+    status: str  # "answered", "failed" or "interrupted" (SIGINT, Ctrl-C)
     reason: str
     answer: dict[str, Any] | None
     ticks: int
@@ -68,6 +68,8 @@ class EpisodeRunner:
     def run(self) -> EpisodeOutcome:
         """Tick the tree until it answers, fails or runs out of time, recording snapshots as it goes.
 
+        Ctrl-C (SIGINT, a KeyboardInterrupt here) ends it as ``interrupted``, the tree stopped.
+
         Returns:
             How the episode ended.
         """
@@ -96,6 +98,9 @@ class EpisodeRunner:
                                           None, ticks, elapsed)
                 if self.tree.root.status == Status.RUNNING:
                     time.sleep(self.tick_period_s)
+        except KeyboardInterrupt:
+            return EpisodeOutcome("interrupted", f"interrupted (SIGINT) during tick {ticks}", None, ticks,
+                                  time.monotonic() - started)
         finally:
             self.tree.root.stop(Status.INVALID)  # terminate whatever is still RUNNING
             self.tree.shutdown()

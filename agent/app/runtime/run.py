@@ -15,7 +15,8 @@ import py_trees
 from behaviours import blackboard as bb
 from worlds.bus.keys import Keys, check_namespace
 from worlds.bus.rpc import QueryFailed
-from worlds.bus.session import free_tcp_endpoint, open_session
+from worlds.bus.session import free_tcp_endpoint
+from agent.app.agents import announce, open_agent_session
 from agent.app.config import Config
 from agent.eqa.calibration import CalibrationError
 from agent.app.runtime.calibrations import calibration_for
@@ -96,7 +97,8 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
     result: dict[str, Any] = {"run_id": run_id, "seed": request.seed, "namespace": namespace,
                               "world": "connected" if request.connect else "spawned", "endpoint": endpoint}
     world: WorldProcess | None = None
-    session = open_session(listen=list(config.bus.listen), connect=[endpoint])
+    session, result["listen"] = open_agent_session(list(config.bus.listen), [endpoint])
+    token = announce(session, run_id, namespace, result["listen"])
     link = WorldLink(session, keys, config.bus.query_timeout_s)
     try:
         vlm = make_vlm(config.vlm)  # a bad model path or backend fails now, before any world starts
@@ -124,10 +126,17 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         result.update({"status": "failed", "reason": reason, "correct": False})
         write_json_atomic(folder / "result.json", result)
         raise RunError(f"{reason}\n(run folder: {folder})") from None
+    except KeyboardInterrupt:  # before the tree ran: nothing to keep but the record of it
+        result.update({"status": "interrupted", "reason": "interrupted (SIGINT) before the episode began",
+                       "correct": False})
+        write_json_atomic(folder / "result.json", result)
+        return {**result, "folder": str(folder)}
     finally:
         link.close()
         if world is not None:
             world.stop()
+        if token is not None:
+            token.undeclare()
         session.close()
     result.update(_outcome_fields(outcome, result))
     result["evaluation"] = evaluation
