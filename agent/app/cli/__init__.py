@@ -1,4 +1,4 @@
-"""The `homebot` command: world, run, watch, bench."""
+"""The `homebot` command: world, run, watch, inspect, bench."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import logging
 import sys
 
 from worlds.bus.session import EndpointError
-from agent.app.cli import bench, calibrate, eval, run, skills, suite, watch
+from agent.app.cli import bench, calibrate, eval, inspect, run, skills, suite, watch
 from agent.app.config import ConfigError
 
 #: Commands with a parser of their own, handed the words after their name: command -> (the module
@@ -56,6 +56,6 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     for name, (_, help_line) in DELEGATED.items():
         commands.add_parser(name, help=help_line)
-    for family in (run, skills, watch, suite, eval, calibrate, bench):
+    for family in (run, skills, watch, inspect, suite, eval, calibrate, bench):
         family.add_command(commands)
     return parser
