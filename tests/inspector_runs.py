@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import json
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import py_trees
+import pytest
 from py_trees.common import Access, Status
 
+from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner
 from agent.app.runtime.record import SnapshotLog
 
@@ -89,3 +92,24 @@ def live_run(session: Any, key: str, ticks: int, period_s: float) -> threading.T
     thread = threading.Thread(target=run, daemon=True)
     thread.start()
     return thread
+
+
+@pytest.fixture(autouse=True)
+def clean_blackboard() -> Iterator[None]:
+    """py_trees' blackboard is process-global: every test starts and ends with an empty one."""
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture
+def bus() -> Iterator[tuple[Any, Any]]:
+    """Two sessions on loopback: the agent's (listening) and the inspector's (connected to it)."""
+    endpoint = free_tcp_endpoint()
+    agent = open_session(listen=[endpoint])
+    inspector = open_session(connect=[endpoint])
+    try:
+        yield agent, inspector
+    finally:
+        inspector.close()
+        agent.close()

@@ -11,23 +11,15 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import py_trees
 import pytest
 
-from inspector_runs import live_run, record_run
+from inspector_runs import bus, clean_blackboard, live_run, record_run  # noqa: F401 - fixtures
 from worlds.bus.keys import Keys
-from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.inspector.history import History
 from agent.app.inspector.server import Inspector
 from agent.app.inspector.sources import LiveAgent, load_run
 from agent.app.tree_state import SnapshotError, behaviour_rows
 
-
-@pytest.fixture(autouse=True)
-def clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 def get(url: str) -> tuple[int, Any]:
@@ -103,17 +95,6 @@ def test_a_run_folder_without_snapshots_or_with_a_bad_line_is_refused(tmp_path: 
     with pytest.raises(SnapshotError, match="line 1: snapshot.version"):
         load_run(tmp_path, History())
 
-
-@pytest.fixture
-def bus() -> Iterator[tuple[Any, Any]]:
-    endpoint = free_tcp_endpoint()
-    agent = open_session(listen=[endpoint])
-    inspector = open_session(connect=[endpoint])
-    try:
-        yield agent, inspector
-    finally:
-        inspector.close()
-        agent.close()
 
 
 def test_live_states_come_from_the_bus_and_control_goes_to_the_agent(bus: tuple[Any, Any]) -> None:
