@@ -6,7 +6,7 @@ PIP := $(BIN)/pip install --constraint constraints.txt
 STAMP := $(VENV)/.installed
 LIBUSB := /usr/lib/x86_64-linux-gnu/libusb-1.0.so.0 /usr/lib/aarch64-linux-gnu/libusb-1.0.so.0
 
-.PHONY: run test test-quick system-deps clean
+.PHONY: run test test-quick system-deps browser-deps clean
 
 run: $(STAMP)
 	$(BIN)/homebot run --seed 0
@@ -17,7 +17,7 @@ test: $(STAMP)
 test-quick: $(STAMP)
 	$(BIN)/python -m pytest -m "not slow"
 
-$(STAMP): pyproject.toml constraints.txt | system-deps
+$(STAMP): pyproject.toml constraints.txt | system-deps browser-deps
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(PIP) --quiet -e '.[test]'
@@ -32,6 +32,18 @@ system-deps:
 		else \
 			echo "open3d needs the system library libusb-1.0; run: sudo apt-get install -y libusb-1.0-0" >&2; \
 			exit 1; \
+		fi; \
+	fi
+
+# The inspector's browser tests drive Debian's chromium through chromium-driver; install them when
+# root, else say exactly what to run (the tests skip without them).
+browser-deps:
+	@if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then \
+		if [ "$$(id -u)" = "0" ]; then \
+			echo "installing chromium and chromium-driver (the inspector's browser tests use them)"; \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver; \
+		else \
+			echo "the inspector's browser tests need chromium; run: sudo apt-get install -y chromium chromium-driver" >&2; \
 		fi; \
 	fi
 

@@ -17,6 +17,7 @@ from worlds.bus.keys import ANY_AGENT_TREE
 from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.config import load_config
 from agent.app.runtime.run import RunRequest, run_episode
+from agent.app.tree_state import behaviour_rows, fold, read_log
 
 pytestmark = pytest.mark.slow
 
@@ -48,7 +49,7 @@ def test_episode_answers_while_a_separate_subscriber_receives_snapshots(tmp_path
     assert (folder / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert received, "the separate subscriber got no snapshot"
     assert {s["run"] for s in received} == {result["run_id"]}
-    names = {b["name"] for b in received[-1]["behaviours"]}
+    names = {b["name"] for b in received[0]["tree"]}
     assert {"Observe", "IntegrateMap", "QueryVLM", "SelectFrontier", "Navigate", "AnswerFallback"} <= names
 
 
@@ -66,8 +67,8 @@ def test_same_seed_gives_the_same_episode(tmp_path: Path) -> None:
 def _navigate_messages(log: Path) -> list[str]:
     """Where each step's move ended, in order, read from the snapshot log."""
     messages: list[str] = []
-    for line in log.read_text().splitlines():
-        for behaviour in json.loads(line)["behaviours"]:
+    for state in fold(read_log(log.read_text())):
+        for behaviour in behaviour_rows(state):
             if behaviour["name"] == "Navigate" and behaviour["status"] == "SUCCESS" and behaviour["visited"]:
                 if not messages or messages[-1] != behaviour["message"]:
                     messages.append(behaviour["message"])
@@ -132,7 +133,7 @@ def test_run_and_watch_from_the_command_line(tmp_path: Path) -> None:
         run.kill()
     assert watch.returncode == 0, watch.stderr
     snapshot = json.loads(watch.stdout)
-    assert snapshot["behaviours"][0]["name"] == "EQA episode"
+    assert snapshot["tree"][0]["name"] == "EQA episode" and snapshot["behaviours"]
     assert run.returncode == 0, stderr
     assert "answer " in stdout and "run folder:" in stdout
 
@@ -152,7 +153,7 @@ def test_a_semantic_episode_shows_the_vlm_its_visual_prompts(tmp_path: Path) -> 
     images = sorted((Path(result["folder"]) / "prompts").glob("step-*.png"))
     assert images and images[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     log = Path(result["folder"]) / "snapshots.jsonl"
-    messages = {b["message"] for line in log.read_text().splitlines() for b in json.loads(line)["behaviours"]
+    messages = {b["message"] for state in fold(read_log(log.read_text())) for b in behaviour_rows(state)
                 if b["name"] == "QueryDirections" and b["status"] == "SUCCESS"}
     assert any("LSV favours" in m for m in messages)
 

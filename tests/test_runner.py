@@ -18,10 +18,12 @@ from behaviours import blackboard as bb
 from worlds.bus.keys import Keys
 from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner
-from agent.app.runtime.snapshot import SNAPSHOT_VERSION, short
-from agent.app.watch import SnapshotError, parse_snapshot, render, watch
+from agent.app.runtime.readable import readable
+from agent.app.runtime.snapshot import SNAPSHOT_VERSION
+from agent.app.tree_state import SnapshotError, TreeState, behaviour_rows, fold, parse_snapshot
+from agent.app.watch import render, watch
 
-SNAPSHOT_FIELDS = {"id", "name", "type", "parent", "status", "message", "visited"}
+ROW_FIELDS = {"id", "name", "type", "parent", "status", "message", "visited"}
 
 
 @pytest.fixture(autouse=True)
@@ -135,48 +137,87 @@ def test_snapshots_reach_the_sink() -> None:
     outcome = run(tree, [snapshots.append])
     assert outcome.status == "answered"
     assert [s["tick"] for s in snapshots] == [1, 2, 3]
+    assert snapshots[0]["full"] and "tree" in snapshots[0] and "tree" not in snapshots[1]
     names = {"Episode", "Explore", "Answer"}
-    for snap in snapshots:
+    states = fold(snapshots)
+    for snap, state in zip(snapshots, states):
         assert snap["version"] == SNAPSHOT_VERSION and snap["run"] == "run-test"
-        assert {b["name"] for b in snap["behaviours"]} == names
-        for behaviour in snap["behaviours"]:
-            assert set(behaviour) == SNAPSHOT_FIELDS
+        rows = behaviour_rows(state)
+        assert {b["name"] for b in rows} == names
+        for behaviour in rows:
+            assert set(behaviour) == ROW_FIELDS
             assert behaviour["status"] in {"SUCCESS", "FAILURE", "RUNNING", "INVALID"}
         json.dumps(snap)  # plain JSON
-    by_name = {b["name"]: b for b in snapshots[0]["behaviours"]}
+    by_name = {b["name"]: b for b in behaviour_rows(states[0])}
     assert by_name["Episode"]["parent"] is None
     assert by_name["Explore"]["parent"] == by_name["Episode"]["id"]
     assert by_name["Explore"]["type"] == "Countdown"
     assert by_name["Explore"]["message"] == "2 ticks to go"
     assert by_name["Explore"]["status"] == "RUNNING" and by_name["Explore"]["visited"]
     assert not by_name["Answer"]["visited"]
-    assert snapshots[0]["status"] == "RUNNING"
-    assert by_name["Explore"]["id"] in snapshots[0]["visited_path"]
-    last = {b["name"]: b for b in snapshots[-1]["behaviours"]}
+    assert states[0]["status"] == "RUNNING"
+    assert by_name["Explore"]["id"] in snapshots[0]["visited"]
+    last = {b["name"]: b for b in behaviour_rows(states[-1])}
     assert last["Answer"]["visited"] and last["Answer"]["status"] == "SUCCESS"
 
 
-def test_snapshot_blackboard_values_are_short_strings() -> None:
+def test_only_ticks_that_change_something_are_published() -> None:
+    snapshots: list[dict[str, Any]] = []
+    waiting = py_trees.behaviours.Running("Wait")
+    outcome = run(sequence(Countdown("Explore", 2), py_trees.behaviours.Success("Ready"), waiting),
+                  [snapshots.append], max_seconds=0.3)
+    assert outcome.status == "failed" and outcome.ticks > 5
+    ticks = [s["tick"] for s in snapshots]
+    assert ticks[:3] == [1, 2, 3] and ticks[-1] == outcome.ticks  # the first, each change, the last
+    assert len(ticks) < outcome.ticks / 2
+    later = [s for s in snapshots[3:-1] if not s.get("full")]
+    assert all(not s["behaviours"] and not s["blackboard"] for s in later)
+    assert fold(snapshots)[-1]["behaviours"] == fold(snapshots[:3])[-1]["behaviours"]
+
+
+def test_snapshots_carry_changed_texts_and_who_wrote_them() -> None:
     snapshots: list[dict[str, Any]] = []
     run(sequence(Countdown("Explore", 2), Answer()), [snapshots.append])
     board = snapshots[0]["blackboard"]
-    assert board, "the visited behaviours' keys are listed"
     assert all(isinstance(v, str) and len(v) <= 72 for v in board.values())
     depth_key = next(k for k in board if k.endswith("depth_image"))
     assert "[480, 640]" in board[depth_key] and "float32" in board[depth_key]
     question_key = next(k for k in board if k.endswith(bb.QUESTION))
     assert board[question_key].startswith("'What colour is the mug") and board[question_key].endswith("…")
+    assert not any(k.endswith("depth_image") for k in snapshots[1]["blackboard"])  # same text: not sent again
+    assert {"tick": 1, "key": depth_key, "by": "Explore", "op": "init"} in snapshots[0]["activity"]
+    assert {"tick": 2, "key": depth_key, "by": "Explore", "op": "set"} in snapshots[1]["activity"]
+    answer_key = next(k for k in snapshots[-1]["blackboard"] if k.endswith(bb.ANSWER))
+    assert {"tick": 2, "key": answer_key, "by": "Answer", "op": "init"} in snapshots[-1]["activity"]
+    assert py_trees.blackboard.Blackboard.activity_stream is None  # the runner turned it off again
 
 
-def test_short_describes_large_values_briefly() -> None:
+def test_readable_describes_large_values_briefly() -> None:
     big = np.zeros((1000, 1000, 3))
-    text = short(big)
+    text = readable(big)
     assert "[1000, 1000, 3]" in text and "float64" in text and len(text) < 72
-    assert short(list(range(1000))).startswith("list of 1000, last 999")
-    assert short("x" * 500).endswith("…") and len(short("x" * 500)) == 72
-    assert short(3.5) == "3.5" and short("hi") == "'hi'"
-    assert short(EpisodeOutcome("answered", "r", None, 1, 0.1)) == "<EpisodeOutcome>"
-    assert short(b"x" * 1000) == "<bytes of 1000>"
+    assert readable(list(range(1000))).startswith("list of 1000, last 999")
+    assert readable("x" * 500).endswith("…") and len(readable("x" * 500)) == 72
+    assert readable(3.5) == "3.5" and readable("hi") == "'hi'"
+    assert readable(EpisodeOutcome("answered", "r", None, 1, 0.1)).startswith("EpisodeOutcome(status='answered'")
+    assert readable(b"x" * 1000) == "<bytes of 1000>"
+    assert readable(np.array([1.23456, 2.0])) == "array [1.235, 2.0]"
+
+
+def test_readable_texts_of_observations_maps_and_poses() -> None:
+    from agent.mapping.occupancy import ExplorationMap
+    from agent.mapping.camera import Intrinsics
+    from agent.observation import Observation
+    from agent.pose import Pose2D
+
+    assert readable(Pose2D(1.0, 2.5, np.pi / 2)) == "(1.00, 2.50, 90°)"
+    observation = Observation(np.zeros((48, 64, 3), np.uint8), np.zeros((48, 64), np.float32),
+                              np.zeros((48, 64), np.int32), (), Intrinsics(64, 48, 50.0, 50.0, 32.0, 24.0),
+                              np.eye(4), Pose2D(1.0, 2.0, 0.0))
+    assert readable(observation) == "64×48 image at (1.00, 2.00, 0°), 0 labels"
+    text = readable(ExplorationMap((0.0, 0.0)))
+    assert text.startswith("map ") and " m from (" in text and "cell " in text and "revision 0" in text
+    assert readable([Pose2D(0, 0, 0)] * 9) == "list of 9, last (0.00, 0.00, 0°)"
 
 
 def test_a_raising_sink_does_not_end_the_episode() -> None:
@@ -199,9 +240,9 @@ def first_snapshot() -> dict[str, Any]:
 
 
 def test_render_shows_every_behaviour_and_message() -> None:
-    snap = first_snapshot()
+    snap = TreeState().apply(first_snapshot())
     text = render(snap, colour=False)
-    for behaviour in snap["behaviours"]:
+    for behaviour in snap["tree"]:
         assert behaviour["name"] in text
     assert "1 ticks to go" in text
     assert "run run-test" in text and "tick 1" in text
@@ -210,14 +251,14 @@ def test_render_shows_every_behaviour_and_message() -> None:
     explore = next(line for line in lines if "Explore" in line)
     episode = next(line for line in lines if "Episode" in line)
     assert explore.startswith("    ") and not episode.startswith(" ")  # children are indented
-    assert "blackboard" in text
+    assert "blackboard" in text and "tick 1: Explore init /depth_image" in text
     assert "\x1b[" in render(snap, colour=True)
 
 
 def test_render_includes_later_messages() -> None:
     snapshots: list[dict[str, Any]] = []
     run(sequence(py_trees.behaviours.Success("Ready"), FailWithMessage("Look at floor")), [snapshots.append])
-    text = render(snapshots[-1], colour=False)
+    text = render(fold(snapshots)[-1], colour=False)
     assert "Look at floor" in text and "no floor in view" in text
 
 
@@ -227,8 +268,12 @@ def test_parse_snapshot_round_trip_and_rejections() -> None:
     for bad in (b"not json", b"\xff\xfe", b""):
         with pytest.raises(SnapshotError, match="not UTF-8 JSON"):
             parse_snapshot(bad)
-    for bad in (b'{"tick": 1}', b"[1, 2]", b'{"behaviours": "all"}', b"3"):
-        with pytest.raises(SnapshotError, match="'behaviours'"):
+    for bad, field in ((b"[1, 2]", "JSON object"), (b'{"version": 1}', "snapshot.version"),
+                       (json.dumps({**snap, "behaviours": "all"}).encode(), "snapshot.behaviours"),
+                       (json.dumps({**snap, "tick": "3"}).encode(), "snapshot.tick"),
+                       (json.dumps({**snap, "behaviours": {"x": ["RUNNING"]}}).encode(), "snapshot.behaviours.x"),
+                       (json.dumps({k: v for k, v in snap.items() if k != "tree"}).encode(), "snapshot.tree")):
+        with pytest.raises(SnapshotError, match=field):
             parse_snapshot(bad)
 
 
@@ -278,7 +323,7 @@ def test_watch_prints_a_published_snapshot(sessions: tuple[Any, Any], namespace:
         stop.set()
         thread.join(5)
     assert code == 0
-    assert json.loads(out.getvalue()) == snap
+    assert json.loads(out.getvalue()) == TreeState().apply(snap)
     assert out.getvalue().count("\n") == 1
 
 

@@ -19,6 +19,7 @@ from agent.app.config import Config, load_config
 from agent.eqa.answers import StepScores, steps_from_records
 from agent.eqa.calibration import Calibration, CalibrationEpisode, read_calibration
 from agent.app.runtime.calibrations import made_with, shipped_calibration, write_calibration
+from agent.app.tree_state import behaviour_rows, fold
 from agent.eqa.stopping import ConformalRule, RelevanceRule, replay
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from worlds.suite import plan_split, write_suite
@@ -98,9 +99,10 @@ def test_the_tree_stops_where_a_replay_of_the_full_episode_says(tmp_path: Path) 
     snapshots = [json.loads(line) for line in (Path(early["folder"]) / "snapshots.jsonl").read_text().splitlines()]
     shown = {key.lstrip("/") for snapshot in snapshots for key in snapshot["blackboard"]}
     assert {"prediction_set", "q_hat", "epsilon"} <= shown
-    answered = [b for b in snapshots[-1]["behaviours"] if b["name"] == "Answer"]
+    states = fold(snapshots)
+    answered = [b for b in behaviour_rows(states[-1]) if b["name"] == "Answer"]
     assert answered and answered[0]["status"] == "SUCCESS"
-    navigations = sum(1 for s in snapshots for b in s["behaviours"]
+    navigations = sum(1 for s in states for b in behaviour_rows(s)
                       if b["name"] == "Navigate" and b["status"] == "SUCCESS" and b["visited"])
     assert navigations > 0
 

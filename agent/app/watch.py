@@ -1,8 +1,9 @@
 """`homebot watch`: follow a running agent's tree snapshots from another process.
 
-Like py-trees-tree-watcher, it renders the tree on every snapshot: each behaviour with its status,
-its feedback message, the visited path in full and the rest dimmed, and the blackboard keys the
-visited behaviours use.
+Like py-trees-tree-watcher, it renders the tree as snapshots come: each behaviour with its status,
+its feedback message, the visited path in full and the rest dimmed, the blackboard's readable
+values and the writes since the last snapshot. Snapshots carry only what changed; the watcher
+keeps the whole state (`agent.app.tree_state.TreeState`) and applies each one.
 """
 
 from __future__ import annotations
@@ -16,40 +17,16 @@ from typing import Any, TextIO
 import zenoh
 
 from worlds.bus.keys import ANY_AGENT_TREE, Keys
+from agent.app.tree_state import SnapshotError, TreeState, behaviour_rows, parse_snapshot
 
 _GLYPHS = {"SUCCESS": ("✔", "32"), "FAILURE": ("✕", "31"), "RUNNING": ("*", "33"), "INVALID": ("-", "90")}
 
 
-class SnapshotError(ValueError):
-    """A snapshot that is not the JSON object a tree snapshot must be."""
-
-
-def parse_snapshot(payload: bytes) -> dict[str, Any]:
-    """Decode one snapshot; reject anything else with the reason (never evaluated, only parsed).
-
-    Args:
-        payload: the sample's bytes.
-
-    Returns:
-        The snapshot.
-
-    Raises:
-        SnapshotError: the payload is not a snapshot.
-    """
-    try:
-        data = json.loads(payload.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise SnapshotError(f"snapshot: not UTF-8 JSON ({error})") from None
-    if not isinstance(data, dict) or not isinstance(data.get("behaviours"), list):
-        raise SnapshotError("snapshot: expected an object with a 'behaviours' list")
-    return data
-
-
 def render(data: dict[str, Any], colour: bool) -> str:
-    """The snapshot as indented text.
+    """A whole state (`TreeState.apply`) as indented text.
 
     Args:
-        data: the snapshot.
+        data: the whole state.
         colour: whether to colour statuses with ANSI codes.
 
     Returns:
@@ -58,7 +35,7 @@ def render(data: dict[str, Any], colour: bool) -> str:
     def paint(text: str, code: str) -> str:
         return f"\x1b[{code}m{text}\x1b[0m" if colour else text
 
-    behaviours = data["behaviours"]
+    behaviours = behaviour_rows(data)
     children: dict[str | None, list[dict[str, Any]]] = {}
     for behaviour in behaviours:
         children.setdefault(behaviour.get("parent"), []).append(behaviour)
@@ -77,23 +54,27 @@ def render(data: dict[str, Any], colour: bool) -> str:
     walk(None, 0)
     blackboard = data.get("blackboard") or {}
     if blackboard:
-        lines.append(paint("blackboard (visited behaviours' keys)", "1"))
+        lines.append(paint("blackboard", "1"))
         lines.extend(f"  {key}: {value}" for key, value in blackboard.items())
+    if data.get("activity"):
+        lines.append(paint("written since the last snapshot", "1"))
+        lines.extend(f"  tick {item['tick']}: {item['by']} {item['op']} {item['key']}" for item in data["activity"])
     return "\n".join(lines)
 
 
 def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bool, timeout_s: float,
           out: TextIO = sys.stdout, refresh_hz: float = 10.0) -> int:
-    """Print snapshots as they come; with ``once``, the first one. Returns an exit code.
+    """Print the tree as snapshots come; with ``once``, the first whole state. Returns an exit code.
 
-    The live tree is redrawn at most ``refresh_hz`` times a second, always with the newest
-    snapshot (an agent ticks far faster than a terminal can usefully redraw). JSON output gets
-    every snapshot.
+    Every snapshot is applied to the whole state (none may be skipped: each carries only what
+    changed), and the live tree is redrawn at most ``refresh_hz`` times a second with the newest
+    state (an agent ticks far faster than a terminal can usefully redraw). JSON output prints every
+    whole state, one line each.
 
     Args:
         session: the bus session.
         namespace: the agent's namespace (any agent when None).
-        once: whether to stop after the first snapshot.
+        once: whether to stop after the first whole state.
         as_json: whether to print JSON rather than the tree.
         timeout_s: how long to wait for a snapshot.
         out: where to print.
@@ -103,35 +84,28 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
         0, or 1 when no snapshot came in time.
     """
     key = Keys(namespace).agent_tree if namespace else ANY_AGENT_TREE
-    inbox: queue.Queue[bytes] = queue.Queue(maxsize=256)
-
-    def on_sample(sample: zenoh.Sample) -> None:
-        try:
-            inbox.put_nowait(sample.payload.to_bytes())
-        except queue.Full:  # a slow terminal skips frames rather than falling behind
-            pass
-
-    subscriber = session.declare_subscriber(key, on_sample)
+    inbox: queue.SimpleQueue[bytes] = queue.SimpleQueue()
+    subscriber = session.declare_subscriber(key, lambda sample: inbox.put(sample.payload.to_bytes()))
     colour = out.isatty() and not as_json
+    tree = TreeState()
     try:
         while True:
             try:
-                payload = inbox.get(timeout=timeout_s)
+                payloads = [inbox.get(timeout=timeout_s)]
             except queue.Empty:
                 sys.stderr.write(f"homebot watch: no tree snapshot on {key} within {timeout_s:.0f} s "
                                  "(is `homebot run` running, and is --connect its --listen endpoint?)\n")
                 return 1
-            if not as_json:
-                payload = _newest(inbox, payload)
-            try:
-                data = parse_snapshot(payload)
-            except SnapshotError as error:
-                sys.stderr.write(f"homebot watch: skipped a bad snapshot: {error}\n")
+            while not inbox.empty():
+                payloads.append(inbox.get())
+            states = [state for state in map(lambda payload: _apply(tree, payload), payloads) if state is not None]
+            if not states:
                 continue
-            text = json.dumps(data, ensure_ascii=False) if as_json else render(data, colour)
+            texts = [json.dumps(state, ensure_ascii=False) for state in states] if as_json else [
+                render(states[-1], colour)]
             if colour:
                 out.write("\x1b[H\x1b[2J")
-            out.write(text + "\n")
+            out.write("\n".join(texts[:1] if once else texts) + "\n")
             out.flush()
             if once:
                 return 0
@@ -143,10 +117,11 @@ def watch(session: zenoh.Session, namespace: str | None, once: bool, as_json: bo
         subscriber.undeclare()
 
 
-def _newest(inbox: queue.Queue[bytes], payload: bytes) -> bytes:
-    """The last snapshot waiting in ``inbox`` (or ``payload`` if none), dropping older ones."""
-    while True:
-        try:
-            payload = inbox.get_nowait()
-        except queue.Empty:
-            return payload
+def _apply(tree: TreeState, payload: bytes) -> dict[str, Any] | None:
+    """The whole state after the snapshot ``payload``; None for a bad one (said on stderr) or while no
+    full snapshot has come."""
+    try:
+        return tree.apply(parse_snapshot(payload))
+    except SnapshotError as error:
+        sys.stderr.write(f"homebot watch: skipped a bad snapshot: {error}\n")
+        return None

@@ -8,6 +8,7 @@ key                                           what travels there
 ``<ns>/world/alive``                          liveliness token, present while the world serves
 ``<ns>/agent/tree``                           publication: a tree snapshot per tick (JSON)
 ``<ns>/agent/events``                         publication: episode events (JSON)
+``<ns>/agent/control/<verb>``                 queryable: pause, step, breakpoints, faults (JSON)
 ============================================  =====================================================
 """
 
@@ -72,6 +73,17 @@ class Keys:
     @property
     def agent_events(self) -> str:
         return f"{self.namespace}/agent/events"
+
+    def agent_control(self, verb: str) -> str:
+        """The key the agent answers the control request ``verb`` on (docs/bus.md).
+
+        Args:
+            verb: the request's name.
+
+        Returns:
+            The key.
+        """
+        return f"{self.namespace}/agent/control/{verb}"
 
 
 #: What `homebot watch` subscribes to when no namespace is given: every run's snapshots.

@@ -30,7 +30,8 @@ def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[
         area_m2: the home's floor area (the seed's own when None).
 
     Returns:
-        The report: the home, the episode's time and status, and each stage's timing.
+        The report: the home, the episode's time and status, the size of its snapshot log, and each
+        stage's timing.
     """
     config = load_config(overrides=["stop.rule=budget"], base=config)
     timer = StageTimer()
@@ -39,11 +40,13 @@ def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[
         request = RunRequest(seed=seed, config=config, out_root=Path(scratch), scene=dump_spec(home), save_map=False,
                              record=False)
         result = run_episode(request, timer=timer)
+        snapshot_bytes = (Path(result["folder"]) / "snapshots.jsonl").stat().st_size
     summary = timer.summary()
     steps = max(1, result.get("steps", 0))
     return {"seed": seed, "area_m2": round(home.area_m2, 1), "rooms": len(home.rooms),
             "steps": result.get("steps", 0), "status": result["status"],
             "episode_s": result["seconds"], "per_step_ms": 1000.0 * result["seconds"] / steps,
+            "ticks": result["ticks"], "snapshot_bytes": snapshot_bytes,
             "stages": {stage: summary[stage] for stage in STAGES if stage in summary}}
 
 
@@ -60,6 +63,7 @@ def format_step_table(report: dict[str, Any]) -> str:
         f"bench step: seed {report['seed']}, {report['area_m2']} m², {report['rooms']} rooms, "
         f"{report['steps']} steps, episode {report['episode_s']:.2f} s "
         f"({report['per_step_ms']:.0f} ms per step), {report['status']}",
+        f"snapshots: {report['snapshot_bytes'] / 1e6:.2f} MB for {report['ticks']} ticks",
         f"{'stage':<10} {'count':>6} {'median ms':>10} {'p95 ms':>9} {'max ms':>9}",
     ]
     for stage, figures in report["stages"].items():

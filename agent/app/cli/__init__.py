@@ -1,4 +1,4 @@
-"""The `homebot` command: world, run, replay, watch, bench."""
+"""The `homebot` command: world, run, replay, watch, inspect, bench."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import logging
 import sys
 
 from worlds.bus.session import EndpointError
-from agent.app.cli import bench, calibrate, eval, replay, run, skills, suite, watch
+from agent.app.cli import bench, calibrate, eval, inspect, replay, run, skills, suite, watch
 from agent.app.cli.options import INTERRUPTED
 from agent.app.config import ConfigError
 
@@ -61,6 +61,6 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     for name, (_, help_line) in DELEGATED.items():
         commands.add_parser(name, help=help_line)
-    for family in (run, replay, skills, watch, suite, eval, calibrate, bench):
+    for family in (run, replay, skills, watch, inspect, suite, eval, calibrate, bench):
         family.add_command(commands)
     return parser

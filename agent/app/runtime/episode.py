@@ -18,7 +18,7 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import blackboard as bb
-from agent.app.runtime.snapshot import snapshot
+from agent.app.runtime.snapshot import SnapshotEncoder
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +44,8 @@ class EpisodeRunner:
     Args:
         root: the tree (set up here).
         run_id: the run's id, in every snapshot.
-        sinks: where the snapshots go.
+        sinks: where the snapshots go (only those of ticks that changed what a viewer sees, and the
+            first and last; see `agent.app.runtime.snapshot`).
         max_seconds: the episode's wall-clock limit.
         tick_period_s: the least time between ticks.
         timer: times the stages, if given.
@@ -75,6 +76,7 @@ class EpisodeRunner:
         """
         started = time.monotonic()
         ticks = 0
+        encoder = SnapshotEncoder(self.run_id)
         try:
             while True:
                 ticks += 1
@@ -83,27 +85,36 @@ class EpisodeRunner:
                 tick_ms = (time.perf_counter() - tick_started) * 1000.0
                 if self.timer is not None:
                     self.timer.record("tick", tick_ms)
-                self._publish(snapshot(self.tree.root, self.visitor, ticks, tick_ms, self.run_id))
-                elapsed = time.monotonic() - started
-                if error is not None:
-                    return EpisodeOutcome("failed", error[1], None, ticks, elapsed, error[0])
-                answer = self.blackboard.get(bb.ANSWER) if self.blackboard.exists(bb.ANSWER) else None
-                if answer is not None:
-                    return EpisodeOutcome("answered", answer["rule"], answer, ticks, elapsed)
-                if self.tree.root.status == Status.FAILURE:
-                    name, reason = self._failure_reason()
-                    return EpisodeOutcome("failed", reason, None, ticks, elapsed, name)
-                if elapsed > self.max_seconds:
-                    return EpisodeOutcome("failed", f"the episode ran past its limit of {self.max_seconds:g} s",
-                                          None, ticks, elapsed)
+                outcome = self._outcome(error, ticks, time.monotonic() - started)
+                data = encoder.encode(self.tree.root, self.visitor, ticks, tick_ms, last=outcome is not None)
+                if data is not None:
+                    self._publish(data)
+                if outcome is not None:
+                    return outcome
                 if self.tree.root.status == Status.RUNNING:
                     time.sleep(self.tick_period_s)
         except KeyboardInterrupt:
             return EpisodeOutcome("interrupted", f"interrupted (SIGINT) during tick {ticks}", None, ticks,
                                   time.monotonic() - started)
         finally:
+            encoder.close()
             self.tree.root.stop(Status.INVALID)  # terminate whatever is still RUNNING
             self.tree.shutdown()
+
+    def _outcome(self, error: tuple[str, str] | None, ticks: int, elapsed: float) -> EpisodeOutcome | None:
+        """How the episode ended on this tick, or None while it goes on."""
+        if error is not None:
+            return EpisodeOutcome("failed", error[1], None, ticks, elapsed, error[0])
+        answer = self.blackboard.get(bb.ANSWER) if self.blackboard.exists(bb.ANSWER) else None
+        if answer is not None:
+            return EpisodeOutcome("answered", answer["rule"], answer, ticks, elapsed)
+        if self.tree.root.status == Status.FAILURE:
+            name, reason = self._failure_reason()
+            return EpisodeOutcome("failed", reason, None, ticks, elapsed, name)
+        if elapsed > self.max_seconds:
+            return EpisodeOutcome("failed", f"the episode ran past its limit of {self.max_seconds:g} s",
+                                  None, ticks, elapsed)
+        return None
 
     def _tick(self) -> tuple[str, str] | None:
         """Tick once; on an exception, (behaviour name, reason)."""

@@ -1,81 +1,128 @@
-"""Tree snapshots: what every behaviour is doing on one tick, as plain JSON.
+"""Tree snapshots, version 2: what changed in the tree and on the blackboard, as plain JSON.
 
-One snapshot names every behaviour (id, name, type, parent, status, feedback message), the path
-visited on that tick, the tick count and duration, and the blackboard keys that the visited
-behaviours use, each as a short string. `homebot watch` renders them; scripts read them.
+`SnapshotEncoder` is asked after every tick and answers a snapshot only when something a viewer
+sees changed (a status, a feedback message, the visited path, a blackboard text), and always for
+the first and the last tick. A snapshot carries the tree's structure only when it is new, and of
+the behaviours and the blackboard only what changed since the last one, so a recorded episode
+stays small; a full snapshot (``"full": true``: the structure, every behaviour, every key) comes
+first, on a change of structure, and every ``full_every_s`` seconds, so a viewer that joins late
+or misses one catches up. `agent.app.tree_state` folds a stream of them back into whole states.
+The format is documented in docs/bus.md.
 """
 
 from __future__ import annotations
 
-import dataclasses
+import time
 from collections.abc import Iterator
 from typing import Any
 
-import numpy as np
 import py_trees
 
-SNAPSHOT_VERSION = 1
-_SHORT = 72
+from agent.app.runtime.readable import readable
+
+SNAPSHOT_VERSION = 2
+
+#: py_trees activity types that change the board, and how a snapshot names them.
+_WRITES = {"INITIALISED": "init", "WRITE": "set", "ACCESSED": "access", "UNSET": "unset"}
 
 
-def short(value: Any) -> str:
-    """A one-line description of a blackboard value that stays readable for large objects.
+class SnapshotEncoder:
+    """Turns the tree after each tick into a version-2 snapshot, or None when nothing visible changed.
 
-    Args:
-        value: the value.
-
-    Returns:
-        The description.
-    """
-    if isinstance(value, np.ndarray):
-        return f"array{list(value.shape)} {value.dtype}"
-    if isinstance(value, (list, tuple)) and len(value) > 4:
-        return f"{type(value).__name__} of {len(value)}, last {short(value[-1])}"
-    if hasattr(value, "__len__") and not isinstance(value, (str, list, tuple, dict)):
-        return f"<{type(value).__name__} of {len(value)}>"
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return f"<{type(value).__name__}>"
-    text = repr(value)
-    return text if len(text) <= _SHORT else text[: _SHORT - 1] + "…"
-
-
-def snapshot(root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.SnapshotVisitor,
-             tick: int, tick_ms: float, run: str) -> dict[str, Any]:
-    """The JSON-able snapshot of the tree just ticked (``visitor`` must have run on that tick).
+    Enables py_trees' blackboard activity stream (and `close` disables it): the writes it records
+    between snapshots travel in the next one as ``activity``.
 
     Args:
-        root: the tree.
-        visitor: the visitor that ran on the tick.
-        tick: the tick's number.
-        tick_ms: how long the tick took.
-        run: the run's id.
-
-    Returns:
-        The snapshot.
+        run: the run's id, in every snapshot.
+        full_every_s: seconds between full snapshots.
     """
-    behaviours = []
-    for behaviour in _pre_order(root):
-        behaviours.append({
-            "id": str(behaviour.id),
-            "name": behaviour.name,
-            "type": type(behaviour).__name__,
-            "parent": str(behaviour.parent.id) if behaviour.parent else None,
-            "status": behaviour.status.value,
-            "message": behaviour.feedback_message,
-            "visited": behaviour.id in visitor.visited,
-        })
-    storage = py_trees.blackboard.Blackboard.storage
-    keys = sorted(visitor.visited_blackboard_keys)
-    return {
-        "version": SNAPSHOT_VERSION,
-        "run": run,
-        "tick": tick,
-        "tick_ms": round(tick_ms, 3),
-        "status": root.status.value,
-        "visited_path": [str(i) for i in visitor.visited],
-        "behaviours": behaviours,
-        "blackboard": {key: short(storage[key]) for key in keys if key in storage},
-    }
+
+    def __init__(self, run: str, full_every_s: float = 5.0) -> None:
+        self.run = run
+        self.full_every_s = full_every_s
+        self._structure: list[tuple[Any, str, str, Any]] | None = None
+        self._ids: dict[Any, str] = {}
+        self._behaviours: dict[str, list[str]] = {}
+        self._visited: list[str] = []
+        self._board: dict[str, str] = {}
+        self._activity: list[dict[str, Any]] = []
+        self._full_at = 0.0
+        py_trees.blackboard.Blackboard.enable_activity_stream(maximum_size=100_000)
+
+    def encode(self, root: py_trees.behaviour.Behaviour, visitor: py_trees.visitors.SnapshotVisitor,
+               tick: int, tick_ms: float, last: bool = False) -> dict[str, Any] | None:
+        """The snapshot of the tick just ticked (``visitor`` must have run on it), or None if nothing changed.
+
+        Args:
+            root: the tree.
+            visitor: the visitor that ran on the tick.
+            tick: the tick's number.
+            tick_ms: how long the tick took.
+            last: whether this is the episode's last tick (always answered).
+
+        Returns:
+            The snapshot, or None.
+        """
+        self._drain_activity(tick)
+        nodes = list(_pre_order(root))
+        structure = [(b.id, b.name, type(b).__name__, b.parent.id if b.parent else None) for b in nodes]
+        full = structure != self._structure or time.monotonic() - self._full_at >= self.full_every_s
+        if structure != self._structure:
+            self._structure, self._ids = structure, _short_ids([b.id for b in nodes])
+        behaviours = {self._ids[b.id]: [b.status.value, b.feedback_message] for b in nodes}
+        visited = [self._ids[i] for i in visitor.visited if i in self._ids]
+        storage = py_trees.blackboard.Blackboard.storage
+        board = {key: readable(storage[key]) for key in sorted(storage)}
+        changed_behaviours = {i: v for i, v in behaviours.items() if self._behaviours.get(i) != v}
+        changed_board = {k: v for k, v in board.items() if self._board.get(k) != v}
+        gone = sorted(set(self._board) - set(board))
+        if not (full or last or changed_behaviours or changed_board or gone or visited != self._visited):
+            return None
+        data: dict[str, Any] = {"version": SNAPSHOT_VERSION, "run": self.run, "tick": tick,
+                                "tick_ms": round(tick_ms, 3), "status": root.status.value}
+        if full:
+            self._full_at = time.monotonic()
+            data["full"] = True
+            data["tree"] = [{"id": self._ids[node_id], "name": name, "type": kind,
+                             "parent": self._ids[parent] if parent else None}
+                            for node_id, name, kind, parent in structure]
+        data["behaviours"] = behaviours if full else changed_behaviours
+        data["visited"] = visited
+        data["blackboard"] = board if full else changed_board
+        if gone and not full:
+            data["removed"] = gone
+        data["activity"], self._activity = self._activity, []
+        self._behaviours, self._visited, self._board = behaviours, visited, board
+        return data
+
+    def close(self) -> None:
+        """Stop recording blackboard activity."""
+        py_trees.blackboard.Blackboard.disable_activity_stream()
+
+    def _drain_activity(self, tick: int) -> None:
+        """Move this tick's board writes from py_trees' stream into the next snapshot (once per
+        key, writer and kind of write)."""
+        stream = py_trees.blackboard.Blackboard.activity_stream
+        if stream is None:
+            return
+        seen = {(a["tick"], a["key"], a["by"], a["op"]) for a in self._activity if a["tick"] == tick}
+        for item in stream.data:
+            op = _WRITES.get(item.activity_type)
+            if op is None or (tick, item.key, item.client_name, op) in seen:
+                continue
+            seen.add((tick, item.key, item.client_name, op))
+            self._activity.append({"tick": tick, "key": item.key, "by": item.client_name, "op": op})
+        stream.clear()
+
+
+def _short_ids(ids: list[Any]) -> dict[Any, str]:
+    """Each behaviour's id cut to the fewest hex digits (at least 6) that keep them apart."""
+    texts = [id_.hex for id_ in ids]
+    for length in range(6, 33):
+        short = [text[:length] for text in texts]
+        if len(set(short)) == len(short):
+            return dict(zip(ids, short))
+    return dict(zip(ids, texts))
 
 
 def _pre_order(behaviour: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
