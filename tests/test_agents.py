@@ -56,11 +56,13 @@ def test_a_taken_endpoint_moves_the_agent_and_the_taken_one_still_reaches_it() -
             session.close()
 
 
-def _start_run(out: Path, listen: str, seed: int, budget: int) -> subprocess.Popen:
+def _start_run(out: Path, listen: str, seed: int, budget: int, tick_period_s: float = 0.002) -> subprocess.Popen:
+    """`homebot run` in the background; a long ``tick_period_s`` keeps it running until interrupted."""
     out.mkdir(parents=True)
     return subprocess.Popen(
         [sys.executable, "-m", "agent.app.cli", "run", "--seed", str(seed), "--listen", listen,
-         "--set", f"episode.budget={budget}", "--stop", "budget", "--out", str(out)],
+         "--set", f"episode.budget={budget}", "--set", f"episode.tick_period_s={tick_period_s}",
+         "--stop", "budget", "--out", str(out)],
         stdout=open(out / "stdout.txt", "w"), stderr=open(out / "stderr.txt", "w"), stdin=subprocess.DEVNULL,
     )
 
@@ -105,7 +107,8 @@ def test_two_runs_on_one_listen_endpoint_both_answer(tmp_path: Path) -> None:
 
 def test_watch_lists_and_attaches_and_ctrl_c_interrupts(tmp_path: Path) -> None:
     default = free_tcp_endpoint()
-    runs = [_start_run(tmp_path / name, default, seed, 40) for name, seed in (("a", 1), ("b", 4))]
+    # a tick every half second: forty steps take minutes, so the episodes are still running at Ctrl-C
+    runs = [_start_run(tmp_path / name, default, seed, 40, 0.5) for name, seed in (("a", 1), ("b", 4))]
     try:
         folders = [_wait_for_snapshots(tmp_path / name, run) for name, run in zip(("a", "b"), runs)]
         worlds = [psutil.Process(run.pid).children() for run in runs]
