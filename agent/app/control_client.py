@@ -32,8 +32,11 @@ def find_agent(session: zenoh.Session, timeout_s: float) -> str:
     Raises:
         ControlFailed: no agent answered, or several did (naming them).
     """
-    namespaces = sorted({control_namespace(str(reply.ok.key_expr))
-                         for reply in session.get(ANY_AGENT_CONTROL_STATE, timeout=timeout_s) if reply.ok})
+    try:
+        namespaces = sorted({control_namespace(str(reply.ok.key_expr))
+                             for reply in session.get(ANY_AGENT_CONTROL_STATE, timeout=timeout_s) if reply.ok})
+    except ValueError as error:  # a reply on a key that is not an agent's control key
+        raise ControlFailed(f"a reply to {ANY_AGENT_CONTROL_STATE}: {error}") from None
     if not namespaces:
         raise ControlFailed(f"no agent answered on {ANY_AGENT_CONTROL_STATE} within {timeout_s:g} s "
                             "(is `homebot run` running, and is --connect its --listen endpoint?)")
