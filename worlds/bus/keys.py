@@ -75,10 +75,10 @@ class Keys:
         return f"{self.namespace}/agent/events"
 
     def agent_control(self, verb: str) -> str:
-        """The key the agent answers the control request ``verb`` on (docs/bus.md).
+        """The key the agent answers the control request ``verb`` on (``*``: every verb).
 
         Args:
-            verb: the request's name.
+            verb: the request's name (``state``, ``pause``, ...), or ``*``.
 
         Returns:
             The key.
@@ -88,3 +88,24 @@ class Keys:
 
 #: What `homebot watch` subscribes to when no namespace is given: every run's snapshots.
 ANY_AGENT_TREE = "**/agent/tree"
+
+#: Where a control client asks which agents answer when no namespace is given.
+ANY_AGENT_CONTROL_STATE = "**/agent/control/state"
+
+
+def control_namespace(key: str) -> str:
+    """The namespace of a control key (``<ns>/agent/control/<verb>``).
+
+    Args:
+        key: the key.
+
+    Returns:
+        The namespace.
+
+    Raises:
+        ValueError: the key is not a control key.
+    """
+    namespace, marker, verb = key.rpartition("/agent/control/")
+    if not marker or not verb or "/" in verb:
+        raise ValueError(f"key: {key!r} is not <namespace>/agent/control/<verb>")
+    return check_namespace(namespace)

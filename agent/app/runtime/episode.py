@@ -18,6 +18,7 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import blackboard as bb
+from agent.app.runtime.control import EpisodeControl, InjectedFault, instrument
 from agent.app.runtime.snapshot import SnapshotEncoder
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,10 @@ class EpisodeOutcome:
 class EpisodeRunner:
     """Ticks an episode's tree until it answers, fails or runs out of time; a leaf's exception ends it as a failure.
 
+    The control (`agent.app.runtime.control`) can pause the tree between ticks or before a
+    behaviour, step it, and inject faults; the time spent paused counts neither against the
+    wall-clock limit nor in the episode's seconds.
+
     Args:
         root: the tree (set up here).
         run_id: the run's id, in every snapshot.
@@ -49,11 +54,12 @@ class EpisodeRunner:
         max_seconds: the episode's wall-clock limit.
         tick_period_s: the least time between ticks.
         timer: times the stages, if given.
+        control: pauses, steps and faults from outside (default: one nobody asks, which changes nothing).
     """
 
     def __init__(self, root: py_trees.behaviour.Behaviour, run_id: str, sinks: list[SnapshotSink],
                  max_seconds: float, tick_period_s: float = 0.002,
-                 timer: Any | None = None) -> None:
+                 timer: Any | None = None, control: EpisodeControl | None = None) -> None:
         self.tree = py_trees.trees.BehaviourTree(root)
         self.tree.setup()  # the leaves make their executors
         self.visitor = py_trees.visitors.SnapshotVisitor()
@@ -65,6 +71,8 @@ class EpisodeRunner:
         self.timer = timer
         self.blackboard = py_trees.blackboard.Client(name="EpisodeRunner")
         self.blackboard.register_key(bb.ANSWER, access=py_trees.common.Access.READ)
+        self.control = control or EpisodeControl(b.name for b in root.iterate())
+        instrument(root, self.control)
 
     def run(self) -> EpisodeOutcome:
         """Tick the tree until it answers, fails or runs out of time, recording snapshots as it goes.
@@ -79,13 +87,16 @@ class EpisodeRunner:
         encoder = SnapshotEncoder(self.run_id)
         try:
             while True:
+                self.control.before_tick()
                 ticks += 1
-                tick_started = time.perf_counter()
+                tick_started, paused_before_tick = time.perf_counter(), self.control.paused_s
                 error = self._tick()
-                tick_ms = (time.perf_counter() - tick_started) * 1000.0
+                # a breakpoint inside the tick is not part of it
+                tick_ms = (time.perf_counter() - tick_started - (self.control.paused_s - paused_before_tick)) * 1000.0
                 if self.timer is not None:
                     self.timer.record("tick", tick_ms)
-                outcome = self._outcome(error, ticks, time.monotonic() - started)
+                self.control.after_tick(ticks)
+                outcome = self._outcome(error, ticks, time.monotonic() - started - self.control.paused_s)
                 data = encoder.encode(self.tree.root, self.visitor, ticks, tick_ms, last=outcome is not None)
                 if data is not None:
                     self._publish(data)
@@ -98,6 +109,7 @@ class EpisodeRunner:
                                   time.monotonic() - started)
         finally:
             encoder.close()
+            self.control.finish()
             self.tree.root.stop(Status.INVALID)  # terminate whatever is still RUNNING
             self.tree.shutdown()
 
@@ -142,7 +154,10 @@ class EpisodeRunner:
 
 
 def _raising_behaviour(error: BaseException) -> str:
-    """The name of the innermost behaviour whose method is on the exception's traceback."""
+    """The name of the innermost behaviour whose method is on the exception's traceback (the
+    behaviour it was injected into, for an injected fault)."""
+    if isinstance(error, InjectedFault):
+        return error.behaviour
     name = "a behaviour"
     frame_tb = error.__traceback__
     while frame_tb is not None:

@@ -22,6 +22,8 @@ from agent.eqa.calibration import CalibrationError
 from agent.app.runtime.calibrations import calibration_for
 from agent.eqa.stopping import StopRuleName, StoppingRule, make_rule
 from agent.mapping.occupancy import ExplorationMap
+from agent.app.runtime.control import EpisodeControl
+from agent.app.runtime.control_bus import ControlServer
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
 from agent.app.runtime.plots import save_map_png
 from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
@@ -170,16 +172,21 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     events.put(json.dumps({"event": "started", "run": run_id, "question": scenario["question"]}))
     root = build_eqa_tree(parts)
     plug_into(root, plugged)
+    control = EpisodeControl(behaviour.name for behaviour in root.iterate())
     runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds,
-                           config.episode.tick_period_s, timer)
+                           config.episode.tick_period_s, timer, control)
+    control_server = ControlServer(session, keys, control)
     if recorder is not None:
         runner.tree.add_post_tick_handler(recorder.after_tick)
     try:
         outcome = runner.run()
     finally:
+        control_server.close()
         snapshot_log.close()
         if recorder is not None:
             recorder.close()
+    if control.injected:
+        outcome.extra["injected"] = control.injected
     log_of_steps = writer.get(bb.ANSWER_LOG)
     outcome.extra["steps"] = len(log_of_steps)
     outcome.extra["step_scores"] = [s.to_record() for s in log_of_steps.steps]
@@ -273,4 +280,5 @@ def _outcome_fields(outcome: EpisodeOutcome, result: dict[str, Any]) -> dict[str
         "ticks": outcome.ticks,
         "seconds": round(outcome.seconds, 3),
         **({"contract_problems": outcome.extra["contract_problems"]} if "contract_problems" in outcome.extra else {}),
+        **({"injected": outcome.extra["injected"]} if "injected" in outcome.extra else {}),
     }
