@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+import urllib.request
 from pathlib import Path
 
 import psutil
@@ -124,6 +125,7 @@ def test_watch_lists_and_attaches_and_ctrl_c_interrupts(tmp_path: Path) -> None:
             attached = _watch(default, "--run", folder.name, "--once", "--json", "--timeout", "60")
             assert attached.returncode == 0, attached.stderr
             assert json.loads(attached.stdout)["run"] == folder.name
+        _inspect_attaches(default, folders[1].name)
         for run in runs:
             run.send_signal(signal.SIGINT)
         codes = [run.wait(timeout=120) for run in runs]
@@ -139,3 +141,24 @@ def test_watch_lists_and_attaches_and_ctrl_c_interrupts(tmp_path: Path) -> None:
         assert (folder / "map.png").exists()
         assert children and not any(child.is_running() and child.status() != psutil.STATUS_ZOMBIE
                                     for child in children)
+
+
+def _inspect_attaches(endpoint: str, run_id: str) -> None:
+    """`homebot inspect --run` serves the states of that run's agent, found through ``endpoint``."""
+    port = int(free_tcp_endpoint().rsplit(":", 1)[1])
+    inspector = subprocess.Popen([sys.executable, "-m", "agent.app.cli", "inspect", "--connect", endpoint, "--run", run_id,
+                                  "--port", str(port), "--timeout", "60"], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True)
+    try:
+        assert f"http://127.0.0.1:{port}/" in inspector.stdout.readline()
+        info = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/api/info", timeout=10).read())
+        assert info["mode"] == "live" and f"homebot/{run_id}" in info["source"]
+        deadline = time.monotonic() + 60
+        states: list = []
+        while not states and time.monotonic() < deadline:
+            states = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/api/states?from=0", timeout=10).read())["states"]
+            time.sleep(0.5)
+        assert states and {state["run"] for state in states} == {run_id}
+    finally:
+        inspector.terminate()
+        inspector.wait(timeout=30)

@@ -122,7 +122,8 @@ def live_episode(tmp_path: Path) -> Iterator[dict[str, Any]]:
     session = open_session(connect=[endpoint])
     history = History()
     live = LiveAgent(session, namespace, history)
-    server = Inspector(history, {"mode": "live", "source": namespace}, controller=live.control)
+    server = Inspector(history, {"mode": "live", "source": namespace}, controller=live.control,
+                       result=lambda: live.outcome)
     try:
         yield {"url": server.start(), "live": live, "runner": runner, "outcome": outcome, "folder": tmp_path / "inspected"}
     finally:
@@ -175,7 +176,8 @@ def test_a_breakpoint_stops_the_ticks_and_step_runs_exactly_one(live_episode: di
 def test_an_injected_failure_shows_in_the_page_and_in_the_result(live_episode: dict[str, Any], browser: Any) -> None:
     wait = open_on(browser, live_episode, "Navigate")
     browser.find_element(By.ID, "inject-failure").click()
-    wait.until(lambda d: "injected: failure in Navigate" in control_text(d))
+    # the control bar says so, or, once the failure has ended the episode, its outcome does
+    wait.until(lambda d: "failure in Navigate" in control_text(d) + d.find_element(By.ID, "outcome").text)
     wait.until(lambda d: d.find_element(By.CSS_SELECTOR, 'g.node[data-name="Navigate"]').get_attribute(
         "data-status") == "FAILURE" or not live_episode["runner"].is_alive())
     live_episode["runner"].join(120)

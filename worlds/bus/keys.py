@@ -89,6 +89,9 @@ class Keys:
 #: What `homebot watch` subscribes to when no namespace is given: every run's snapshots.
 ANY_AGENT_TREE = "**/agent/tree"
 
+#: What the inspector subscribes to when no namespace is given: every run's episode events.
+ANY_AGENT_EVENTS = "**/agent/events"
+
 #: Where a control client asks which agents answer when no namespace is given.
 ANY_AGENT_CONTROL_STATE = "**/agent/control/state"
 

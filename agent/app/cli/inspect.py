@@ -10,6 +10,7 @@ from pathlib import Path
 
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import open_session
+from agent.app.agents import AgentInfo, find_agents
 from agent.app.cli.options import DEFAULT_AGENT_ENDPOINT, Commands
 
 
@@ -25,6 +26,10 @@ def add_command(commands: Commands) -> None:
     inspect.add_argument("--connect", metavar="ENDPOINT",
                          help=f"a live agent's listen endpoint (default {DEFAULT_AGENT_ENDPOINT})")
     inspect.add_argument("--namespace", help="the live agent's namespace (default: the first agent heard)")
+    inspect.add_argument("--run", metavar="RUN_ID", help="the live agent of this run (`homebot watch --list` shows "
+                                                         "the running ones)")
+    inspect.add_argument("--timeout", type=float, default=30.0,
+                         help="seconds to wait for the agent of --run to announce itself (default 30)")
     inspect.add_argument("--host", default="127.0.0.1", help="the address the page is served on (default 127.0.0.1)")
     inspect.add_argument("--port", type=int, default=0, help="the page's port (default: any free one)")
     inspect.set_defaults(handler=_inspect)
@@ -36,8 +41,11 @@ def _inspect(args: argparse.Namespace) -> int:
     from agent.app.inspector.sources import LiveAgent, load_run
     from agent.app.tree_state import SnapshotError
 
-    if args.run_dir is not None and (args.connect or args.namespace):
-        print("homebot inspect: RUN_DIR: give a run folder or --connect/--namespace, not both", file=sys.stderr)
+    if args.run_dir is not None and (args.connect or args.namespace or args.run):
+        print("homebot inspect: RUN_DIR: give a run folder or --connect/--namespace/--run, not both", file=sys.stderr)
+        return 2
+    if args.run and args.namespace:
+        print("homebot inspect: --run and --namespace: give one (a run's id names its namespace)", file=sys.stderr)
         return 2
     if args.namespace:
         check_namespace(args.namespace)
@@ -54,11 +62,18 @@ def _inspect(args: argparse.Namespace) -> int:
         server = Inspector(history, {"mode": "recorded", "source": str(args.run_dir)}, result=result,
                            host=args.host, port=args.port)
     else:
-        endpoint = args.connect or DEFAULT_AGENT_ENDPOINT
+        endpoint, namespace = args.connect or DEFAULT_AGENT_ENDPOINT, args.namespace
+        if args.run:
+            found = _announced(endpoint, args.run, args.timeout)
+            if found is None:
+                print(f"homebot inspect: --run {args.run}: no such agent announced itself through {endpoint} "
+                      f"within {args.timeout:.0f} s (`homebot watch --list` shows the running ones)", file=sys.stderr)
+                return 1
+            endpoint, namespace = found.endpoint, found.namespace
         session = open_session(connect=[endpoint])
-        agent = LiveAgent(session, args.namespace, history)
-        server = Inspector(history, {"mode": "live", "source": f"{endpoint} {args.namespace or '(any namespace)'}"},
-                           controller=agent.control, host=args.host, port=args.port)
+        agent = LiveAgent(session, namespace, history)
+        server = Inspector(history, {"mode": "live", "source": f"{endpoint} {namespace or '(any namespace)'}"},
+                           controller=agent.control, result=lambda: agent.outcome, host=args.host, port=args.port)
     print(f"homebot inspect: open {server.start()}  (Ctrl-C stops)", flush=True)
     try:
         threading.Event().wait()
@@ -71,3 +86,13 @@ def _inspect(args: argparse.Namespace) -> int:
         if session is not None:
             session.close()
     return 0
+
+
+def _announced(endpoint: str, run_id: str, timeout_s: float) -> AgentInfo | None:
+    """The agent of ``run_id`` as it announced itself through ``endpoint``, or None."""
+    session = open_session(connect=[endpoint])
+    try:
+        found = find_agents(session, timeout_s, run_id)
+    finally:
+        session.close()
+    return found[0] if found else None

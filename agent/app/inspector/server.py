@@ -41,16 +41,20 @@ class Inspector:
         history: the states it serves.
         info: what ``/api/info`` says besides ``controls``.
         controller: forwards control requests (None for a recorded run: they are refused).
-        result: a recorded run's result, for ``/api/result``.
+        result: how the run ended, for ``/api/result``: a recorded run's result.json, or a function
+            that says so for a live one (``{}`` while it runs).
         host: the address to listen on.
         port: the port (0: any free one).
     """
 
     def __init__(self, history: History, info: dict[str, Any], controller: Controller | None = None,
-                 result: dict[str, Any] | None = None, host: str = "127.0.0.1", port: int = 0) -> None:
+                 result: dict[str, Any] | Callable[[], dict[str, Any]] | None = None, host: str = "127.0.0.1",
+                 port: int = 0) -> None:
+        fixed = result or {}
+        outcome = staticmethod(result if callable(result) else lambda: fixed)
         handler = type("Handler", (_Handler,), {"history": history, "controller": controller,
                                                 "info": {**info, "controls": controller is not None},
-                                                "result": result or {}})
+                                                "outcome": outcome})
         self._server = ThreadingHTTPServer((host, port), handler)
         self._server.daemon_threads = True
         self._thread = threading.Thread(target=self._server.serve_forever, name="inspector", daemon=True)
@@ -80,7 +84,7 @@ class _Handler(BaseHTTPRequestHandler):
     history: History
     controller: Controller | None
     info: dict[str, Any]
-    result: dict[str, Any]
+    outcome: Callable[[], dict[str, Any]]
     protocol_version = "HTTP/1.1"
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
@@ -97,7 +101,7 @@ class _Handler(BaseHTTPRequestHandler):
         elif url.path == "/api/info":
             self._json(HTTPStatus.OK, self.info)
         elif url.path == "/api/result":
-            self._json(HTTPStatus.OK, self.result)
+            self._json(HTTPStatus.OK, self.outcome())
         elif url.path == "/api/states" and start is not None:
             states, after = self.history.since(start)
             self._json(HTTPStatus.OK, {"states": states, "next": after})

@@ -10,7 +10,7 @@ from typing import Any
 
 import zenoh
 
-from worlds.bus.keys import ANY_AGENT_TREE, Keys
+from worlds.bus.keys import ANY_AGENT_EVENTS, ANY_AGENT_TREE, Keys
 from agent.app.inspector.history import History
 from agent.app.tree_state import SnapshotError, parse_snapshot, read_log
 
@@ -61,8 +61,11 @@ class LiveAgent:
         self.namespace = namespace
         self.history = history
         self.timeout_s = timeout_s
+        self.outcome: dict[str, Any] = {}  # how the episode ended, once it has: status, reason, injected
         key = Keys(namespace).agent_tree if namespace else ANY_AGENT_TREE
         self._subscriber = session.declare_subscriber(key, self._on_sample)
+        events = Keys(namespace).agent_events if namespace else ANY_AGENT_EVENTS
+        self._events = session.declare_subscriber(events, self._on_event)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         namespace = str(sample.key_expr).removesuffix("/agent/tree")
@@ -74,6 +77,21 @@ class LiveAgent:
             self.history.add(parse_snapshot(sample.payload.to_bytes()))
         except SnapshotError as error:
             log.warning("skipped a bad snapshot: %s", error)
+
+    def _on_event(self, sample: zenoh.Sample) -> None:
+        """Keep how the followed episode ended (its ``ended`` event), as result.json would say it."""
+        if str(sample.key_expr).removesuffix("/agent/events") != self.namespace:
+            return
+        try:
+            event = json.loads(sample.payload.to_bytes().decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError):
+            log.warning("skipped an episode event that is not UTF-8 JSON")
+            return
+        if not isinstance(event, dict) or event.get("event") != "ended":
+            return
+        extra = event.get("extra") if isinstance(event.get("extra"), dict) else {}
+        self.outcome = {"status": event.get("status"), "reason": event.get("reason"),
+                        **({"injected": extra["injected"]} if isinstance(extra.get("injected"), list) else {})}
 
     def control(self, verb: str, body: bytes) -> dict[str, Any]:
         """Forward one control request to the agent and return its reply.
@@ -102,6 +120,7 @@ class LiveAgent:
     def close(self) -> None:
         """Stop following the agent."""
         self._subscriber.undeclare()
+        self._events.undeclare()
 
 
 def _control_request(verb: str, body: bytes) -> dict[str, Any]:

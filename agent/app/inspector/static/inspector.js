@@ -146,19 +146,23 @@ function showControl(reply) {
   if (shown >= 0) draw(shown);
 }
 
+async function showOutcome() {
+  const result = await (await fetch("/api/result")).json();
+  if (result.status) {
+    const injected = (result.injected || []).map((f) => `${f.fault} in ${f.behaviour} on tick ${f.tick}`);
+    $("outcome").textContent = `${result.status}: ${result.reason}` + (injected.length ? `; injected ${injected.join(", ")}` : "");
+  }
+}
+
 async function start() {
   info = await (await fetch("/api/info")).json();
   $("source").textContent = `${info.mode}: ${info.source}`;
   if (!info.controls) {
     for (const id of ["pause", "step", "continue"]) $(id).disabled = true;
     $("control-state").textContent = "a recorded run: no controls";
-    const result = await (await fetch("/api/result")).json();
-    if (result.status) {
-      const injected = (result.injected || []).map((f) => `${f.fault} in ${f.behaviour} on tick ${f.tick}`);
-      $("outcome").textContent = `${result.status}: ${result.reason}` + (injected.length ? `; injected ${injected.join(", ")}` : "");
-    }
+    showOutcome();
   } else {
-    setInterval(() => control("state"), 1000);
+    setInterval(() => { control("state"); showOutcome(); }, 1000);
     control("state");
   }
   $("timeline").addEventListener("input", (event) => {
