@@ -50,12 +50,15 @@ EPSILON = "epsilon"
 ACTS = "acts"
 APPROACH_STATE = "approach_state"
 LOOK_INSIDE_STATE = "look_inside_state"
+FRONTIER_CHOICES = "frontier_choices"
+DIRECTION_PROMPTS = "direction_prompts"
 
 
 @dataclass(frozen=True)
 class KeySpec:
     """One key of the contract: what it holds (``type``, described in ``about``), who writes it,
-    who reads it (class names of leaves, or the node name where one class appears twice), and how
+    who reads it (class names of leaves, or the node name where one class appears twice; the runtime's
+    ``EpisodeRunner`` and ``Recorder`` read from outside the tree), and how
     an episode starts it ("" for keys a leaf writes first)."""
 
     type: type | tuple[type, ...]
@@ -110,6 +113,10 @@ CONTRACT: dict[str, KeySpec] = {
                             ("ApproachStorage",), "nothing seen yet"),
     LOOK_INSIDE_STATE: KeySpec(LookInsideState, "behaviours.episode_state.LookInsideState", ("EpisodeSetup", "LookInside"),
                                ("LookInside",), "nothing seen or tried yet"),
+    FRONTIER_CHOICES: KeySpec(list, "list[behaviours.choices.FrontierChoice], the frontiers of the last choice",
+                              ("EpisodeSetup", "SelectFrontier"), ("Recorder",), "[]"),
+    DIRECTION_PROMPTS: KeySpec(list, "list[behaviours.choices.DirectionPrompt], the last prompt's points and LSV",
+                               ("EpisodeSetup", "QueryDirections"), ("Recorder",), "[]"),
 }
 
 
@@ -151,6 +158,8 @@ def seed_board(start: EpisodeStart, name: str = "EpisodeSetup") -> py_trees.blac
         ACTS: [],
         APPROACH_STATE: ApproachState(),
         LOOK_INSIDE_STATE: LookInsideState(),
+        FRONTIER_CHOICES: [],
+        DIRECTION_PROMPTS: [],
     }
     if start.strategy.use_semantic:
         initial[SEMANTIC_MAP] = start.strategy.new_semantic_map(world_map.spec, start.semantic_values)

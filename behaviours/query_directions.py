@@ -3,7 +3,8 @@
 The visual prompt of Explore until Confident (§IV-C): up to three free floor points in view are
 drawn as letters; LSV is the VLM's choice among the letters, GSV its P(Yes) that anything in view
 is worth exploring. Each point's value exp(τ_LSV·LSV + τ_GSV·GSV) goes into the semantic map. The
-annotated image of every step that asked is saved, so a person can see what the VLM was shown.
+annotated image of every step that asked is saved, so a person can see what the VLM was shown, and
+the points with their letters and LSV go to ``direction_prompts`` (for the recording).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from PIL import Image
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.choices import DirectionPrompt
 from agent.eqa.prompts import YES_NO, gsv_prompt, lsv_prompt
 from agent.mapping.semantic_map import SemanticValueConfig
 from agent.observation import Observation
@@ -54,6 +56,7 @@ class QueryDirections(AsyncVLMQuery):
         for key in (bb.QUESTION, bb.OBSERVATION, bb.MAP, bb.ANSWER_LOG):
             self.blackboard.register_key(key, access=Access.READ)
         self.blackboard.register_key(bb.SEMANTIC_MAP, access=Access.WRITE)  # the directions' values go into it
+        self.blackboard.register_key(bb.DIRECTION_PROMPTS, access=Access.WRITE)
 
     def inputs(self) -> tuple[Observation, str, list[PromptPoint], int]:
         observation: Observation = self.blackboard.get(bb.OBSERVATION)
@@ -76,6 +79,10 @@ class QueryDirections(AsyncVLMQuery):
 
     def use(self, answer: tuple[list[PromptPoint], dict[str, float], float]) -> Status:
         points, lsv, p_yes = answer
+        floor_z = self.points_config.floor_z
+        self.blackboard.set(bb.DIRECTION_PROMPTS, [DirectionPrompt(round(float(p.xy[0]), 3), round(float(p.xy[1]), 3),
+                                                                   floor_z, p.letter, float(lsv[p.letter]))
+                                                   for p in points])
         if not points:
             self.feedback_message = "no free floor in view to point at"
             return Status.SUCCESS

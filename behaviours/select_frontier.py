@@ -10,9 +10,10 @@ import py_trees
 from py_trees.common import Access, Status
 
 from behaviours import blackboard as bb
+from behaviours.choices import FrontierChoice
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.frontier_plan import Candidates, ExploreConfig, plan_move, reachable_frontiers
-from agent.planning.frontier_choice import choose_frontier, kept_goal
+from agent.planning.frontier_choice import choose_frontier, frontier_probabilities, kept_goal
 from agent.planning.semantic import FrontierWeightConfig, frontier_log_weights
 from agent.timing import StageTimer
 
@@ -30,7 +31,8 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
     from the semantic map (Explore until Confident, eq. 4), with the episode's seeded generator;
     under the default rule both weigh the path length and keep to the frontier chosen until it is
     reached or gone (`agent.planning.frontier_choice`, which keeps it in ``frontier_goal``); LFE plans over the shipped network's estimates with the steps left (`agent.lfe.eqa_frontier`),
-    loading the network on the first choice so that other methods never import torch.
+    loading the network on the first choice so that other methods never import torch. The
+    candidates, with their share of the weight and the one chosen, go to ``frontier_choices``.
 
     Args:
         config: the exploration method and its settings.
@@ -62,6 +64,7 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.blackboard.register_key(bb.PLAN, access=Access.WRITE)
         self.blackboard.register_key(bb.FRONTIER_GOAL, access=Access.WRITE)
         self.blackboard.register_key(bb.MAP_FIELDS, access=Access.WRITE)  # computes the map's fields once a step
+        self.blackboard.register_key(bb.FRONTIER_CHOICES, access=Access.WRITE)
 
     def update(self) -> Status:
         world_map = self.blackboard.get(bb.MAP)
@@ -70,14 +73,19 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             candidates = reachable_frontiers(world_map, robot_xy, self.config, self.blackboard.get(bb.MAP_FIELDS))
             centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]).reshape(-1, 2))
             earlier_goal = self.blackboard.get(bb.FRONTIER_GOAL)
+            log_weights = None
             if self.learned:
                 index = self._learned_choice(world_map, robot_xy, candidates) if candidates.frontiers else None
             else:
-                index = self._weighted_choice(candidates, centres, earlier_goal)
+                log_weights = self._log_weights(candidates)
+                index = choose_frontier(centres, candidates.distances_m, log_weights, earlier_goal,
+                                        self.config.choice, self.rng) if candidates.frontiers else None
             plan = plan_move(candidates, index, robot_xy, self.config) if index is not None else None
         goal = None if plan is None else world_map.spec.to_world(np.asarray(plan.frontier.centre))
         self.blackboard.set(bb.PLAN, plan)
         self.blackboard.set(bb.FRONTIER_GOAL, goal)
+        self.blackboard.set(bb.FRONTIER_CHOICES, _choices(centres, candidates.distances_m, log_weights,
+                                                          index if plan is not None else None))
         if plan is None:
             self.feedback_message = "no reachable frontier is left"
             return Status.SUCCESS
@@ -87,17 +95,13 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         self.feedback_message = f"{len(candidates.frontiers)} frontiers; {rule} at {plan.goal_distance_m:.1f} m"
         return Status.SUCCESS
 
-    def _weighted_choice(self, candidates: Candidates, centres: np.ndarray, earlier_goal: np.ndarray | None) -> int | None:
-        """FBE's or the semantic methods' choice under the configured rule; ``centres``: the
-        candidates' world (x, y)."""
-        if not candidates.frontiers:
+    def _log_weights(self, candidates: Candidates) -> np.ndarray | None:
+        """The semantic methods' log w_p of the candidates; None for FBE, or when there are none."""
+        if not (self.semantic and candidates.frontiers):
             return None
-        log_weights = None
-        if self.semantic:
-            semantic_map = self.blackboard.get(bb.SEMANTIC_MAP)
-            log_weights = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
-                                               self.weights, semantic_map.default)
-        return choose_frontier(centres, candidates.distances_m, log_weights, earlier_goal, self.config.choice, self.rng)
+        semantic_map = self.blackboard.get(bb.SEMANTIC_MAP)
+        return frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
+                                    self.weights, semantic_map.default)
 
     def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
         from agent.lfe.estimator import LearnedEstimator
@@ -107,6 +111,15 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
             self.estimator = LearnedEstimator.load()
         steps_left = self.blackboard.get(bb.BUDGET) - len(self.blackboard.get(bb.ANSWER_LOG))
         return lfe_frontier(world_map, robot_xy, candidates, self.estimator, steps_left, self.config.max_step_m).choice
+
+
+def _choices(centres: np.ndarray, distances_m: np.ndarray, log_weights: np.ndarray | None,
+             chosen: int | None) -> list[FrontierChoice]:
+    """The candidates as ``frontier_choices`` keeps them: centre, path length, share of the weight."""
+    shares = frontier_probabilities(log_weights) if log_weights is not None else [None] * len(centres)
+    return [FrontierChoice(round(float(x), 3), round(float(y), 3), round(float(distance), 3),
+                           None if share is None else float(share), i == chosen)
+            for i, ((x, y), distance, share) in enumerate(zip(centres, distances_m, shares))]
 
 
 class MarkExplorationComplete(py_trees.behaviour.Behaviour):

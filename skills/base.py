@@ -69,7 +69,9 @@ class SkillResult:
     ``tcp_pose``: the TCP's final world pose; ``achieved``: the part's opening it was left at (m or
     rad; doors and drawers). ``planning_ms`` / ``execution_s``: wall time of planning (the plan call,
     whether it succeeded or not) and of running the steps; ``steps_done`` of ``steps``; ``contacts``: what the arm touched on the way; ``info``:
-    the plan's figures (IK and trajectory time, motion seconds, grasp or camera pose...)."""
+    the plan's figures (IK and trajectory time, motion seconds, grasp or camera pose...); ``joints``:
+    the arm's joint positions in the last reply (rad or m, in the planner's ``joint_names`` order),
+    None when no reply carried them."""
 
     ok: bool
     reason: str = ""
@@ -83,6 +85,7 @@ class SkillResult:
     steps: int = 0
     contacts: list[dict[str, Any]] = field(default_factory=list)
     info: dict[str, Any] = field(default_factory=dict)
+    joints: np.ndarray | None = None
 
 
 class ArmSkill(PortedSkill):
@@ -295,7 +298,7 @@ class ArmSkill(PortedSkill):
         last = self._last or {}
         return SkillResult(ok, reason, self.skill_name, last.get("held"), last.get("tcp_pose"), self._achieved,
                            self._planning_ms, execution, self._index,
-                           len(self._steps), list(self._contacts), info)
+                           len(self._steps), list(self._contacts), info, last.get("q"))
 
     def _succeed(self) -> Status:
         result = self._result(True, "")

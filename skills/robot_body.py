@@ -4,14 +4,16 @@ tables and counters it remembers.
 What the scene-graph executor (`skills.robot.Robot`) and its handling of doors, drawers and picks
 share: the `SkillContext` the skills run in, the `SkillRegistry` that makes them by name, where the
 base stands as the world last said (``pose``), where the robot first looked (``home``, set by
-`skills.robot.Robot.observe`), the head camera's position (``eye``) and every skill run's name,
-outcome and timings (``skill_times``).
+`skills.robot.Robot.observe`), the head camera's position (``eye``), every skill run's name,
+outcome and timings (``skill_times``), and whoever wants each run's result as it ends
+(``skill_listeners``: a recording of the arm's joints).
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any, TypeVar
 
 import numpy as np
@@ -62,10 +64,12 @@ class RobotBody:
         self.eye = np.zeros(3)  # the head camera's position at its last frame
         self.head_sees_from = 0.0  # how far ahead of the start pose the head camera sees the table's top
         self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
+        self.skill_listeners: list[Callable[[str, ArmResult], None]] = []  # told each run's name and result
 
     def run(self, name: str, **bindings: Any) -> ArmResult:
         """Make the skill registered as ``name`` with ``bindings`` for its ports and run it to its
-        end; on a failure after the arm moved, fold it away. The run is kept in `skill_times`.
+        end; on a failure after the arm moved, fold it away. The run is kept in `skill_times`, and
+        its result given to each of `skill_listeners`.
 
         Args:
             name: the skill's registered name.
@@ -85,6 +89,8 @@ class RobotBody:
                                  "execution_s": round(result.execution_s, 3),
                                  "wall_s": round(time.perf_counter() - began, 3),
                                  **({} if result.ok else {"reason": result.reason})})
+        for listener in self.skill_listeners:
+            listener(name, result)
         if not result.ok and name != STOW and (result.steps_done or result.execution_s > 0):
             self.run(STOW, surface_z=bindings.get("surface_z"))  # out of the way
         return result

@@ -1,8 +1,11 @@
-"""Rerun recordings: a real episode's recording.rrd read back with Rerun's own reader, `homebot replay`
-refusing a folder without one, and evaluations keeping recordings only when asked."""
+"""Rerun recordings: a real episode's recording.rrd read back with Rerun's own reader (the frames,
+scores, map, frontiers weighed and prompt points among them), `homebot replay` refusing a folder
+without one, evaluations keeping recordings only when asked, and a robot tabletop scene's recording
+holding the arm's joints after each skill run."""
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -13,6 +16,7 @@ from rerun.chunk import RrdReader
 
 from agent.app.cli import build_parser, main
 from agent.app.config import load_config
+from agent.app.eval.tabletop_recording import ARM_JOINTS, SKILL_LOG
 from agent.app.runtime import recording_log as view
 from agent.app.runtime.run import RunRequest, run_episode
 from agent.app.runtime.viewer import RECORDING_FILE
@@ -35,35 +39,42 @@ def _rows(path: Path) -> dict[str, list[dict[str, Any]]]:
     return {entity: sorted(found, key=lambda row: row.get("tick", 0)) for entity, found in rows.items()}
 
 
-class _Observations:
-    """Counts the distinct observations the board held after each tick (a snapshot sink)."""
+class _Distinct:
+    """Keeps the distinct objects the board held under ``key`` after each tick (a snapshot sink)."""
 
-    def __init__(self) -> None:
+    def __init__(self, key: str) -> None:
+        self.key = key
         self.seen: list[Any] = []
 
     def __call__(self, _snapshot: dict[str, Any]) -> None:
-        observation = py_trees.blackboard.Blackboard.storage.get("/" + bb.OBSERVATION)
-        if observation is not None and not any(observation is seen for seen in self.seen):
-            self.seen.append(observation)
+        value = py_trees.blackboard.Blackboard.storage.get("/" + self.key)
+        if value is not None and not any(value is seen for seen in self.seen):
+            self.seen.append(value)
+
+
+def _drawn(rows: list[dict[str, Any]], kind: str) -> list[dict[str, Any]]:
+    """The rows that drew points of ``kind`` (Points2D, Points3D), not those that cleared them."""
+    return [row for row in rows if row.get(f"{kind}:positions")]
 
 
 def test_an_episode_records_each_observation_step_and_status_change(tmp_path: Path) -> None:
-    config = load_config(overrides=[f'bus.listen=["{free_tcp_endpoint()}"]', "episode.budget=3", "stop.rule=budget"])
-    observations = _Observations()
+    # seed 3's fourth step is the first whose view has free floor far enough off to letter
+    config = load_config(overrides=[f'bus.listen=["{free_tcp_endpoint()}"]', "episode.budget=4", "stop.rule=budget"])
+    observations, frontiers, prompts = _Distinct(bb.OBSERVATION), _Distinct(bb.FRONTIER_CHOICES), _Distinct(bb.DIRECTION_PROMPTS)
     result = run_episode(RunRequest(seed=3, config=config, out_root=tmp_path, save_map=False),
-                         extra_sinks=[observations])
+                         extra_sinks=[observations, frontiers, prompts])
     assert result["status"] == "answered", result["reason"]
     rows = _rows(Path(result["folder"]) / RECORDING_FILE)
 
     frames = len(observations.seen)
-    assert frames >= result["steps"] == 3
+    assert frames >= result["steps"] == 4
     for entity in (view.CAMERA, view.RGB, view.DEPTH, view.SEGMENTATION):
         assert len(rows[entity]) == frames, entity
     assert rows[view.CAMERA][0]["Pinhole:image_from_camera"] is not None
     labels = rows[view.SEGMENTATION][0]["AnnotationContext:context"][0]
     assert labels and all(entry["class_description"]["info"]["label"] for entry in labels)
     for letter in "ABCD":
-        assert [row["step"] for row in rows[f"{view.ANSWERS}/{letter}"]] == [1, 2, 3]
+        assert [row["step"] for row in rows[f"{view.ANSWERS}/{letter}"]] == [1, 2, 3, 4]
     scores = result["step_scores"]
     assert [row["Scalars:scalars"][0] for row in rows[view.RELEVANCE]] == pytest.approx(
         [step["relevance"] for step in scores], abs=1e-5)
@@ -76,6 +87,30 @@ def test_an_episode_records_each_observation_step_and_status_change(tmp_path: Pa
     assert statuses[0] == "RUNNING" and statuses[-1] == "SUCCESS"
     assert all(a != b for a, b in zip(statuses, statuses[1:])), "a status is logged only when it changes"
     assert len(rows[view.TREE_STATUS]) == len(statuses) < result["ticks"]
+    _frontiers_and_prompts_match(rows, frontiers, prompts)
+
+
+def _frontiers_and_prompts_match(rows: dict[str, list[dict[str, Any]]], frontiers: _Distinct, prompts: _Distinct) -> None:
+    """Every frontier choice and visual prompt the board held is drawn once: the frontiers with
+    their share of the weight, the chosen one marked; the prompt's points with letter and LSV."""
+    chosen_lists = [choices for choices in frontiers.seen if choices]
+    drawn = _drawn(rows[view.FRONTIERS], "Points2D")
+    assert len(chosen_lists) >= 3 and len(drawn) == len(chosen_lists)
+    for row, choices in zip(drawn, chosen_lists):
+        labels = row["Points2D:labels"]
+        assert labels == [("chosen " if c.chosen else "") + f"w {c.weight:.2f}" for c in choices]
+        assert sum(label.startswith("chosen") for label in labels) == 1
+        assert sum(float(label.split("w ")[1]) for label in labels) == pytest.approx(1.0, abs=0.01 * len(labels))
+        assert len(row["Points2D:radii"]) == len(labels)
+    lettered = [points for points in prompts.seen if points]
+    assert lettered, "a semantic episode of four steps letters some view"
+    for kind, entity in (("Points2D", view.MAP_PROMPTS), ("Points3D", view.WORLD_PROMPTS)):
+        drawn = _drawn(rows[entity], kind)
+        assert [row[f"{kind}:labels"] for row in drawn] == [[f"{p.letter} {p.value:.2f}" for p in points]
+                                                             for points in lettered]
+    world = _drawn(rows[view.WORLD_PROMPTS], "Points3D")[0]["Points3D:positions"]
+    assert [value for point in world for value in point] == pytest.approx(
+        [value for p in lettered[0] for value in (p.x, p.y, p.z)], abs=1e-5)
 
 
 def test_replay_of_a_folder_without_a_recording_names_the_path(tmp_path: Path,
@@ -104,3 +139,19 @@ def test_evaluations_record_only_when_asked(tmp_path: Path) -> None:
     rows = _rows(out / "recordings" / "door-only-0-symbolic" / RECORDING_FILE)
     graph = rows["acsg"][0]
     assert len(graph["GraphNodes:node_ids"]) >= 2 and graph["GraphEdges:edges"]
+
+
+def test_a_robot_tabletop_recording_holds_the_arms_joints_after_each_skill(tmp_path: Path) -> None:
+    out = tmp_path / "robot"
+    assert main(["eval", "interactive", "--executor", "robot", "--tasks", "drawer-only", "--variants", "1",
+                 "--out", str(out), "--record"]) == 0
+    result = json.loads((out / "interactive-results.jsonl").read_text().splitlines()[0])
+    rows = _rows(out / "recordings" / "drawer-only-0-robot" / RECORDING_FILE)
+    runs = result["skill_times"]
+    assert runs and [row["TextLog:text"][0] for row in rows[SKILL_LOG]] == [
+        f"{run['skill']}: {'done' if run['ok'] else 'failed'}" for run in runs]
+    joints = sorted(entity for entity in rows if entity.startswith(ARM_JOINTS + "/"))
+    assert f"{ARM_JOINTS}/lift_joint" in joints and len(joints) == 8
+    for entity in joints:
+        assert [row["skill"] for row in rows[entity]] == list(range(1, len(runs) + 1)), entity
+    assert rows["acsg"]

@@ -27,7 +27,7 @@ from agent.acsg.metrics import episode_metrics
 from skills.robot import Robot
 from agent.perception.memory import InstanceMemory
 from agent.app.runtime.local_world import local_world
-from agent.app.eval.tabletop_recording import record_graph
+from agent.app.eval.tabletop_recording import SkillRuns, record_graph
 from worlds.bus.link import WorldLink
 from worlds.facts import CLOSED_SHARE
 from worlds.sim import World
@@ -45,7 +45,8 @@ def run_robot(task: str, seed: int, recording: Path | None = None) -> dict[str, 
     Args:
         task: the tabletop task.
         seed: the variant's seed.
-        recording: a folder to write the explored graph's Rerun recording into, or None.
+        recording: a folder to write the Rerun recording into (the explored graph, the arm's joints
+            after each skill run), or None.
 
     Returns:
         The metrics and figures.
@@ -58,13 +59,18 @@ def run_robot(task: str, seed: int, recording: Path | None = None) -> dict[str, 
             link.call("reset", {"seed": seed, "tabletop": task})
             start_positions, start_states = object_positions(served.world, scene), part_states(served.world, scene)
             robot = Robot(link)
+            skill_runs = SkillRuns()
+            if recording is not None:
+                robot.body.skill_listeners.append(skill_runs)
             result = explore(robot, RuleDecisionModule(), robot)
             final_positions, final_states = object_positions(served.world, scene), part_states(served.world, scene)
         finally:
             link.close()
     explored = in_world_ids(result.graph, robot.memory)
     if recording is not None:
-        record_graph(recording, f"{task}-{seed}-robot", explored)
+        planner = robot.body.context.planner
+        record_graph(recording, f"{task}-{seed}-robot", explored, skill_runs,
+                     planner.joint_names if planner is not None else ())
     metrics = episode_metrics(explored, from_ground_truth(scene.ground_truth_acsg()), start_positions,
                               final_positions, start_states, final_states, tolerance_m=PUT_BACK_M)
     skills = robot.skill_times

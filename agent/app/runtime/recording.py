@@ -90,8 +90,9 @@ class Recorder:
         self._acts_logged = len(acts)
 
     def _record_map(self, world_map: Any, board: dict[str, Any]) -> None:
-        """The map's layers on a new revision, the route when it grew, the plan when it is new, and
-        the semantic values when they took in a new view."""
+        """The map's layers on a new revision, the route when it grew, the plan when it is new, the
+        frontiers weighed and the prompt's lettered points when they changed, and the semantic
+        values when they took in a new view."""
         if self._changed(bb.MAP, (id(world_map), world_map.revision)):
             view.log_map(self.stream, world_map)
         trajectory = board.get(bb.TRAJECTORY) or []
@@ -99,6 +100,11 @@ class Recorder:
             view.log_trajectory(self.stream, world_map.spec, trajectory)
         if bb.PLAN in board and self._changed(bb.PLAN, board[bb.PLAN]):
             view.log_plan(self.stream, world_map.spec, board[bb.PLAN])
+        for key, log_points in ((bb.FRONTIER_CHOICES, view.log_frontier_choices),
+                                (bb.DIRECTION_PROMPTS, view.log_direction_prompts)):
+            points = board.get(key)
+            if points is not None and self._changed(key, tuple(points)):
+                log_points(self.stream, world_map.spec, points)
         semantic_map = board.get(bb.SEMANTIC_MAP)
         if semantic_map is not None and self._changed(bb.SEMANTIC_MAP, float(semantic_map.weight.sum())):
             view.log_semantic_values(self.stream, semantic_map)

@@ -20,6 +20,7 @@ from agent.mapping.semantic_map import SemanticMap
 from agent.observation import Observation
 from agent.planning.frontier_plan import MovePlan
 from agent.pose import Pose2D
+from behaviours.choices import DirectionPrompt, FrontierChoice
 
 CAMERA = "world/camera"
 RGB = f"{CAMERA}/rgb"
@@ -31,6 +32,9 @@ MAP_TRAJECTORY = "map/trajectory"
 PLAN_PATH = "map/plan/path"
 PLAN_FRONTIER = "map/plan/frontier"
 SEMANTIC_VALUES = "map/semantic_value"
+FRONTIERS = "map/frontiers"
+MAP_PROMPTS = "map/prompts"
+WORLD_PROMPTS = "world/prompts"
 ANSWERS = "answers"
 RELEVANCE = "answers/relevance"
 PREDICTION_SET = "answers/prediction_set"
@@ -101,17 +105,53 @@ def log_plan(stream: rr.RecordingStream, spec: GridSpec, plan: MovePlan | None) 
         plan: the plan, or None.
     """
     if plan is None:
-        stream.log(PLAN_PATH, rr.Clear(recursive=False))
-        stream.log(PLAN_FRONTIER, rr.Clear(recursive=False))
-        return
+        return _clear(stream, PLAN_PATH, PLAN_FRONTIER)
     stream.log(PLAN_PATH, rr.LineStrips2D([map_pixels(spec, plan.path_xy)], colors=[[0, 160, 255]], draw_order=11.0))
     if plan.frontier is None:
-        stream.log(PLAN_FRONTIER, rr.Clear(recursive=False))
-        return
+        return _clear(stream, PLAN_FRONTIER)
     cells = spec.to_world(plan.frontier.cells)
     label = f"frontier of {plan.frontier.size} cells, {plan.goal_distance_m:.1f} m away"
     stream.log(PLAN_FRONTIER, rr.Points2D(map_pixels(spec, cells), colors=[[255, 0, 200]], radii=0.5,
                                           labels=[label] + [""] * (len(cells) - 1), draw_order=12.0))
+
+
+def log_frontier_choices(stream: rr.RecordingStream, spec: GridSpec, choices: Sequence[FrontierChoice]) -> None:
+    """The candidate frontiers of the last choice at their centres, each labelled with its share of
+    the semantic weight (or, without weights, its path length) and drawn larger the more it
+    weighs; the chosen one magenta and labelled so. Nothing (cleared) when there were none.
+
+    Args:
+        stream: the recording.
+        spec: the map's grid.
+        choices: the candidates.
+    """
+    if not choices:
+        return _clear(stream, FRONTIERS)
+    labels = [("chosen " if c.chosen else "") + (f"w {c.weight:.2f}" if c.weight is not None else f"{c.distance_m:.1f} m")
+              for c in choices]
+    radii = [1.0 + 4.0 * (c.weight if c.weight is not None else 0.25) for c in choices]
+    colors = [[255, 0, 200] if c.chosen else [230, 200, 0] for c in choices]
+    xy = np.array([[c.x, c.y] for c in choices], dtype=float)
+    stream.log(FRONTIERS, rr.Points2D(map_pixels(spec, xy), radii=radii, colors=colors, labels=labels, draw_order=13.0))
+
+
+def log_direction_prompts(stream: rr.RecordingStream, spec: GridSpec, prompts: Sequence[DirectionPrompt]) -> None:
+    """The lettered points of the last visual prompt, labelled with their letter and LSV: over the
+    map in 2D and on the floor in 3D. Nothing (cleared) when the view had none.
+
+    Args:
+        stream: the recording.
+        spec: the map's grid.
+        prompts: the points.
+    """
+    if not prompts:
+        return _clear(stream, MAP_PROMPTS, WORLD_PROMPTS)
+    labels = [f"{p.letter} {p.value:.2f}" for p in prompts]
+    xy = np.array([[p.x, p.y] for p in prompts], dtype=float)
+    stream.log(MAP_PROMPTS, rr.Points2D(map_pixels(spec, xy), radii=1.5, colors=[[0, 200, 120]], labels=labels,
+                                        draw_order=14.0))
+    stream.log(WORLD_PROMPTS, rr.Points3D([[p.x, p.y, p.z] for p in prompts], radii=0.08, colors=[[0, 200, 120]],
+                                          labels=labels))
 
 
 def log_semantic_values(stream: rr.RecordingStream, semantic_map: SemanticMap) -> None:
@@ -175,6 +215,12 @@ def log_act(stream: rr.RecordingStream, text: str) -> None:
         text: what the try did.
     """
     stream.log(ACT_LOG, rr.TextLog(text, level="INFO"))
+
+
+def _clear(stream: rr.RecordingStream, *entities: str) -> None:
+    """Clear what was drawn at ``entities`` (their children stay)."""
+    for entity in entities:
+        stream.log(entity, rr.Clear(recursive=False))
 
 
 def map_pixels(spec: GridSpec, xy: np.ndarray) -> np.ndarray:
