@@ -16,6 +16,7 @@ from agent.observation import Observation
 from agent.perception.memory import InstanceMemory, MemoryConfig
 from agent.perception.sightings import Sightings
 from agent.planning.room_goal import RoomFloors
+from skills.skill_runs import SkillRuns
 
 #: Parts attach to the part or piece with voxels this near (`MemoryConfig.part_gap_m`): a little
 #: more than the memory's default, since storage is often first seen from metres away, where a
@@ -103,3 +104,4 @@ class LookInsideState:
     rooms: dict[int, str] = field(default_factory=dict)
     floors: RoomFloors | None = None
     tried: set[int] = field(default_factory=set)
+    arm: SkillRuns = field(default_factory=SkillRuns)  # every skill the acts ran, for a recording

@@ -281,6 +281,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
                                              hold_open=True, scan_table_edge=False),  # storage stands on the floor
                       memory=state.memory, routes=routes)
+        robot.body.skill_listeners.append(state.arm)
         piece = first.parent if first.parent is not None else first.id
         records: list[ActRecord] = []
         views: list[Observation] = []
@@ -297,6 +298,9 @@ class LookInside(py_trees.behaviour.Behaviour):
                     or stop.is_set()):
                 break
             part = self._untried_part(state, piece)
+        planner = robot.body.context.planner
+        if planner is not None:  # names the joints of the runs kept for a recording
+            state.arm.joint_names = tuple(planner.joint_names)
         missed = any(not record.looked for record in records) or self._untried_part(state, piece) is not None
         if views and missed and before is not None:
             # Some door or drawer was not looked behind: the piece as it stood shows it shut, so

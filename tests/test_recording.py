@@ -16,12 +16,13 @@ from rerun.chunk import RrdReader
 
 from agent.app.cli import build_parser, main
 from agent.app.config import load_config
-from agent.app.eval.tabletop_recording import ARM_JOINTS, SKILL_LOG
 from agent.app.runtime import recording_log as view
 from agent.app.runtime.run import RunRequest, run_episode
 from agent.app.runtime.viewer import RECORDING_FILE
 from behaviours import blackboard as bb
 from worlds.bus.session import free_tcp_endpoint
+from worlds.home import generate_home
+from worlds.scenario import make_scenario
 
 pytestmark = pytest.mark.slow
 
@@ -148,10 +149,27 @@ def test_a_robot_tabletop_recording_holds_the_arms_joints_after_each_skill(tmp_p
     result = json.loads((out / "interactive-results.jsonl").read_text().splitlines()[0])
     rows = _rows(out / "recordings" / "drawer-only-0-robot" / RECORDING_FILE)
     runs = result["skill_times"]
-    assert runs and [row["TextLog:text"][0] for row in rows[SKILL_LOG]] == [
+    assert runs and [row["TextLog:text"][0] for row in rows[view.SKILL_LOG]] == [
         f"{run['skill']}: {'done' if run['ok'] else 'failed'}" for run in runs]
-    joints = sorted(entity for entity in rows if entity.startswith(ARM_JOINTS + "/"))
-    assert f"{ARM_JOINTS}/lift_joint" in joints and len(joints) == 8
+    joints = sorted(entity for entity in rows if entity.startswith(view.ARM_JOINTS + "/"))
+    assert f"{view.ARM_JOINTS}/lift_joint" in joints and len(joints) == 8
     for entity in joints:
         assert [row["skill"] for row in rows[entity]] == list(range(1, len(runs) + 1)), entity
     assert rows["acsg"]
+
+
+def test_an_act_that_opens_storage_records_the_arms_joints_of_each_skill(tmp_path: Path) -> None:
+    """The hidden-evidence episode of home 60 opens storage: every skill its acts ran is logged, with
+    the arm's joints by name."""
+    config = load_config(overrides=[f'bus.listen=["{free_tcp_endpoint()}"]'])
+    scenario = make_scenario(generate_home(60), 60, hidden=True).to_dict()
+    runs = _Distinct(bb.LOOK_INSIDE_STATE)
+    result = run_episode(RunRequest(seed=60, config=config, out_root=tmp_path, scenario=scenario, save_map=False),
+                         extra_sinks=[runs])
+    assert result["acts"], "the episode was to open storage"
+    [state] = runs.seen
+    rows = _rows(Path(result["folder"]) / RECORDING_FILE)
+    assert [row["TextLog:text"][0] for row in rows[view.SKILL_LOG]] == [
+        f"{name}: {'done' if ok else 'failed'}" for name, ok, _ in state.arm.runs]
+    joints = sorted(entity for entity in rows if entity.startswith(view.ARM_JOINTS + "/"))
+    assert f"{view.ARM_JOINTS}/lift_joint" in joints and len(joints) == 8

@@ -27,7 +27,8 @@ from agent.acsg.metrics import episode_metrics
 from skills.robot import Robot
 from agent.perception.memory import InstanceMemory
 from agent.app.runtime.local_world import local_world
-from agent.app.eval.tabletop_recording import SkillRuns, record_graph
+from agent.app.eval.tabletop_recording import record_graph
+from skills.skill_runs import SkillRuns
 from worlds.bus.link import WorldLink
 from worlds.facts import CLOSED_SHARE
 from worlds.sim import World
@@ -69,8 +70,8 @@ def run_robot(task: str, seed: int, recording: Path | None = None) -> dict[str, 
     explored = in_world_ids(result.graph, robot.memory)
     if recording is not None:
         planner = robot.body.context.planner
-        record_graph(recording, f"{task}-{seed}-robot", explored, skill_runs,
-                     planner.joint_names if planner is not None else ())
+        skill_runs.joint_names = tuple(planner.joint_names) if planner is not None else ()
+        record_graph(recording, f"{task}-{seed}-robot", explored, skill_runs)
     metrics = episode_metrics(explored, from_ground_truth(scene.ground_truth_acsg()), start_positions,
                               final_positions, start_states, final_states, tolerance_m=PUT_BACK_M)
     skills = robot.skill_times

@@ -9,43 +9,21 @@ A recording that cannot be written is logged and the evaluation goes on.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import rerun as rr
 
 from agent.acsg.graph import ACSG
 from agent.app.runtime.viewer import RECORDING_FILE
-from skills.base import SkillResult
+from agent.app.runtime.recording_log import log_skill_runs
+from skills.skill_runs import SkillRuns
 
 log = logging.getLogger(__name__)
 
 ACSG_ENTITY = "acsg"
-ARM_JOINTS = "arm/joints"
-SKILL_LOG = "arm/skill"
 
 
-@dataclass
-class SkillRuns:
-    """Each skill run's name, whether it succeeded and the arm's joints it ended with, in order; a
-    `skills.robot_body.RobotBody` skill listener."""
-
-    runs: list[tuple[str, bool, np.ndarray | None]] = field(default_factory=list)
-
-    def __call__(self, name: str, result: SkillResult) -> None:
-        """Keep one run.
-
-        Args:
-            name: the skill's registered name.
-            result: how it went.
-        """
-        self.runs.append((name, result.ok, result.joints))
-
-
-def record_graph(folder: Path, run_id: str, graph: ACSG, skills: SkillRuns | None = None,
-                 joint_names: Sequence[str] = ()) -> None:
+def record_graph(folder: Path, run_id: str, graph: ACSG, skills: SkillRuns | None = None) -> None:
     """Write ``<folder>/recording.rrd`` with the explored graph: its nodes (objects by label, actions
     by type and target) and its edges, directed; and, given ``skills``, on the ``skill`` timeline
     (one step per run) each run's name and outcome and the arm's joints it ended with, a scalar per
@@ -56,7 +34,6 @@ def record_graph(folder: Path, run_id: str, graph: ACSG, skills: SkillRuns | Non
         run_id: the recording's id.
         graph: the explored graph.
         skills: the skill runs, or None.
-        joint_names: the arm's joints in the order of the runs' positions (``joint<i>`` where unknown).
     """
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -66,13 +43,10 @@ def record_graph(folder: Path, run_id: str, graph: ACSG, skills: SkillRuns | Non
         labels = [entry.get("label") or f"{entry['type']} {entry['target']}" for entry in nodes]
         stream.log(ACSG_ENTITY, rr.GraphNodes([entry["id"] for entry in nodes], labels=labels),
                    rr.GraphEdges([(edge.source, edge.target) for edge in graph.edges()], graph_type="directed"))
-        for index, (name, ok, joints) in enumerate(skills.runs if skills is not None else [], start=1):
-            stream.set_time("skill", sequence=index)
-            stream.log(SKILL_LOG, rr.TextLog(f"{name}: {'done' if ok else 'failed'}", level="INFO" if ok else "WARN"))
-            for j, position in enumerate(joints if joints is not None else []):
-                joint = joint_names[j] if j < len(joint_names) else f"joint{j}"
-                stream.log(f"{ARM_JOINTS}/{joint}", rr.Scalars(float(position)))
+        if skills is not None:
+            log_skill_runs(stream, skills, 0)
         stream.flush()
         stream.disconnect()
     except Exception:  # a recording must not cost the evaluation its result
         log.exception("no recording of %s: %s could not be written", run_id, folder)
+

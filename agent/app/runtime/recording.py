@@ -41,6 +41,7 @@ class Recorder:
         self._status: str | None = None
         self._steps_logged = 0
         self._acts_logged = 0
+        self._arm_logged = 0  # skill runs of the acts logged
 
     def after_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
         """Log what changed on the tick just run; never raises.
@@ -87,6 +88,9 @@ class Recorder:
         acts = board.get(bb.ACTS) or []
         for act in acts[self._acts_logged:]:
             view.log_act(self.stream, f"{act.storage} {act.part}: {act.outcome or act.reason or 'tried'}")
+        look_inside = board.get(bb.LOOK_INSIDE_STATE)
+        if len(acts) > self._acts_logged and look_inside is not None:  # an act ended: its arm's runs, joints named
+            self._arm_logged = view.log_skill_runs(self.stream, look_inside.arm, self._arm_logged)
         self._acts_logged = len(acts)
 
     def _record_map(self, world_map: Any, board: dict[str, Any]) -> None:

@@ -21,7 +21,10 @@ from agent.observation import Observation
 from agent.planning.frontier_plan import MovePlan
 from agent.pose import Pose2D
 from behaviours.choices import DirectionPrompt, FrontierChoice
+from skills.skill_runs import SkillRuns
 
+ARM_JOINTS = "arm/joints"  # a scalar per joint, after each skill run
+SKILL_LOG = "arm/skill"  # each skill run's name and outcome
 CAMERA = "world/camera"
 RGB = f"{CAMERA}/rgb"
 DEPTH = f"{CAMERA}/depth"
@@ -237,3 +240,24 @@ def map_pixels(spec: GridSpec, xy: np.ndarray) -> np.ndarray:
     column = (xy[:, 0] - spec.origin_xy[0]) / spec.resolution
     row = spec.shape[0] - (xy[:, 1] - spec.origin_xy[1]) / spec.resolution
     return np.column_stack([column, row])
+
+
+def log_skill_runs(stream: rr.RecordingStream, skills: SkillRuns, start: int) -> int:
+    """Log the runs of ``skills`` from index ``start`` on, one step of the ``skill`` timeline each:
+    its name and outcome under `SKILL_LOG`, a scalar per joint under `ARM_JOINTS`.
+
+    Args:
+        stream: the recording.
+        skills: the runs.
+        start: how many of them were logged before.
+
+    Returns:
+        How many are logged now.
+    """
+    runs = list(skills.runs)
+    for index, (name, ok, joints) in enumerate(runs[start:], start=start + 1):
+        stream.set_time("skill", sequence=index)
+        stream.log(SKILL_LOG, rr.TextLog(f"{name}: {'done' if ok else 'failed'}", level="INFO" if ok else "WARN"))
+        for j, position in enumerate(joints if joints is not None else []):
+            stream.log(f"{ARM_JOINTS}/{skills.joint(j)}", rr.Scalars(float(position)))
+    return len(runs)
