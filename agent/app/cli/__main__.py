@@ -1,7 +1,5 @@
 """`python -m agent.app.cli`: the `homebot` command without its console script."""
 
-import sys
+from agent.app.cli import entry_point
 
-from agent.app.cli import main
-
-sys.exit(main())
+entry_point()

@@ -7,14 +7,17 @@ fork would copy in a broken state.
 
 Ctrl-C is the caller's to handle: workers ignore SIGINT, and on it the caller cancels the calls not
 yet started and ends the running ones (SIGTERM, which a worker turns into SystemExit so that its
-cleanup, a world child's shutdown included, runs), keeping what finished.
+cleanup, a world child's shutdown included, runs; SIGKILL for one that does not end within a few
+seconds), keeping what finished.
 """
 
 from __future__ import annotations
 
+import atexit
 import multiprocessing
+import os
 import signal
-import sys
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
@@ -63,17 +66,35 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
 
 
 def quiet_worker() -> None:
-    """Worker initialiser: leave Ctrl-C (SIGINT) to the parent; SIGTERM exits through SystemExit, cleanup run."""
+    """Worker initialiser: leave Ctrl-C (SIGINT) to the parent; on SIGTERM run the exit handlers (a
+    world child's shutdown among them) and end the process. Not by SystemExit: the pool's worker
+    loop catches that as the call's error and would go on serving."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
+    signal.signal(signal.SIGTERM, _end_worker)
 
 
-def stop_workers(pool: ProcessPoolExecutor) -> None:
-    """After Ctrl-C: cancel the calls not yet started and end the running ones (SIGTERM).
+def _end_worker(*_: object) -> None:
+    """SIGTERM in a worker: its exit handlers, then exit at once."""
+    atexit._run_exitfuncs()
+    os._exit(128 + signal.SIGTERM)
+
+
+def stop_workers(pool: ProcessPoolExecutor, grace_s: float = 5.0) -> None:
+    """After Ctrl-C: cancel the calls not yet started and end the running ones: SIGTERM, and SIGKILL
+    for a worker still there after ``grace_s`` (one blocked in a call that never returns to Python,
+    a query to a world the same Ctrl-C ended, would otherwise hold the pool's shutdown forever).
 
     Args:
         pool: a pool whose workers ran `quiet_worker`.
+        grace_s: how long the workers have to clean up.
     """
+    # the executor offers no other way to end a call; read them first: shutdown forgets them
+    processes = list((pool._processes or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in list((pool._processes or {}).values()):  # the executor offers no other way to end a call
+    for process in processes:
         process.terminate()
+    deadline = time.monotonic() + grace_s
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            process.kill()
