@@ -30,6 +30,7 @@ import py_trees
 from py_trees.common import Access
 
 from skills.context import SkillContext
+from worlds.bus.link import WorldLink
 
 
 class _Required:
@@ -182,7 +183,6 @@ class PortedSkill(py_trees.behaviour.Behaviour):
         """
         super().__init__(name or type(self).__name__)
         self.context = context
-        self.link = context.link
         bindings = dict(bindings or {})
         declared = {port.name: port for port in self.ports}
         label = self.skill_name or type(self).__name__
@@ -206,6 +206,11 @@ class PortedSkill(py_trees.behaviour.Behaviour):
         self.inputs: Mapping[str, Any] = MappingProxyType({})
         self.outputs: dict[str, Any] = {}
         self._input_problem = ""
+
+    @property
+    def link(self) -> WorldLink:
+        """The world the skill acts in (its context's link)."""
+        return self.context.link
 
     def initialise(self) -> None:
         """Read the inputs (the blackboard's for those bound to a key) and forget the last outputs."""

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
-import os
 import sys
 
 from worlds.bus.session import EndpointError
@@ -49,21 +48,6 @@ def main(argv: list[str] | None = None) -> int:
         command = " ".join(word for word in argv[:2] if not word.startswith("-"))
         print(f"\nhomebot {command}: interrupted (Ctrl-C); what finished is kept", file=sys.stderr)
         return INTERRUPTED
-
-
-def entry_point() -> None:
-    """The ``homebot`` console script: `main`, and exit with its code.
-
-    After Ctrl-C the process exits at once, once the command has written what finished and stopped
-    its worlds (its ``finally`` blocks have run by then): a process pool whose workers were ended
-    mid-call can leave threads that would otherwise hold the interpreter's exit.
-    """
-    code = main()
-    if code == INTERRUPTED:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
-    sys.exit(code)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,5 +1,7 @@
 """`python -m agent.app.cli`: the `homebot` command without its console script."""
 
-from agent.app.cli import entry_point
+import sys
 
-entry_point()
+from agent.app.cli import main
+
+sys.exit(main())
