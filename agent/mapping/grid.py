@@ -82,8 +82,6 @@ class GridSpec:
     def disc(self, centre_xy: tuple[float, float], radius_m: float) -> np.ndarray:
         """A boolean grid that is true on cells whose centre lies within ``radius_m`` of the point.
 
-        Only the window around the disc is computed: the map is large and this runs every step.
-
         Args:
             centre_xy: the disc's centre (world, m).
             radius_m: its radius.
@@ -92,15 +90,32 @@ class GridSpec:
             The grid's boolean mask.
         """
         mask = np.zeros(self.shape, dtype=bool)
+        window = self.disc_window(centre_xy, radius_m)
+        if window is not None:
+            mask[window[0]] = window[1]
+        return mask
+
+    def disc_window(self, centre_xy: tuple[float, float],
+                    radius_m: float) -> tuple[tuple[slice, slice], np.ndarray] | None:
+        """`disc` as the window of the grid around the disc and the disc's mask over that window:
+        what to use where the disc is marked into a grid every step, the map being large.
+
+        Args:
+            centre_xy: the disc's centre (world, m).
+            radius_m: its radius.
+
+        Returns:
+            (rows, cols) slices and the mask over them; None when the disc misses the grid.
+        """
         centre = np.asarray(centre_xy, dtype=float)
         low = np.maximum(self.to_cell(centre - radius_m), 0)
         high = np.minimum(self.to_cell(centre + radius_m) + 1, self.shape)
         if np.any(low >= high):
-            return mask
+            return None
         rows, cols = np.mgrid[low[0]:high[0], low[1]:high[1]]
         centres = self.to_world(np.stack([rows, cols], axis=-1))
-        mask[low[0]:high[0], low[1]:high[1]] = np.hypot(centres[..., 0] - centre[0], centres[..., 1] - centre[1]) <= radius_m
-        return mask
+        inside = np.hypot(centres[..., 0] - centre[0], centres[..., 1] - centre[1]) <= radius_m
+        return (slice(low[0], high[0]), slice(low[1], high[1])), inside
 
     def extent(self) -> tuple[float, float, float, float]:
         """(xmin, xmax, ymin, ymax), for plotting.

@@ -29,8 +29,10 @@ from scipy import ndimage
 
 from agent.mapping.camera import Intrinsics, back_project, narrow_view_mask
 from agent.mapping.grid import GridSpec
-from agent.mapping.surface import surface_voxels
-from agent.mapping.tsdf import TsdfConfig, TsdfMap, Voxels
+from agent.mapping.columns import ColumnBands, SurfaceColumns
+from agent.mapping.tsdf import TsdfConfig, TsdfMap
+
+_EIGHT = np.ones((3, 3), dtype=bool)
 
 
 @dataclass(frozen=True)
@@ -78,35 +80,6 @@ def lattice_grid(centre_xy: tuple[float, float], config: OccupancyConfig) -> Gri
     return GridSpec((origin[0], origin[1]), config.resolution, (cells, cells))
 
 
-def project_columns(spec: GridSpec, voxels: Voxels, config: OccupancyConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(floor_seen, occupied) boolean grids from the observed surface voxels.
-
-    ``spec`` must be a `lattice_grid`: cells are found from voxel indices, whose positions then lie
-    a quarter cell or more from every cell boundary.
-
-    Args:
-        spec: the grid (a `lattice_grid`).
-        voxels: the TSDF's voxels.
-        config: the map's settings (heights, surface band).
-
-    Returns:
-        floor_seen and occupied.
-    """
-    surface = surface_voxels(voxels, config.surface_tsdf, 0.5 / config.tsdf.trunc_voxels)
-    points = voxels.points[surface]
-    cells = spec.to_cell(points[:, :2])
-    inside = spec.inside(cells)
-    points, cells = points[inside], cells[inside]
-    z = points[:, 2]
-    floor_seen = np.zeros(spec.shape, dtype=bool)
-    occupied = np.zeros(spec.shape, dtype=bool)
-    at_floor = (z >= config.floor_band[0]) & (z <= config.floor_band[1])
-    floor_seen[cells[at_floor, 0], cells[at_floor, 1]] = True
-    obstacle = (z >= config.obstacle_min_z) & (z <= config.obstacle_max_z)
-    occupied[cells[obstacle, 0], cells[obstacle, 1]] = True
-    return floor_seen, occupied
-
-
 class ExplorationMap:
     """The robot's picture of the home so far: TSDF plus the 2D free, occupied and explored grids.
 
@@ -119,6 +92,9 @@ class ExplorationMap:
         self.config = config
         self.spec = lattice_grid(start_xy, config)
         self.tsdf = TsdfMap(config.tsdf)
+        self.columns = SurfaceColumns(self.spec, self.tsdf, ColumnBands(
+            config.floor_band, (config.obstacle_min_z, config.obstacle_max_z), config.surface_tsdf,
+            0.5 / config.tsdf.trunc_voxels))
         self.explored = np.zeros(self.spec.shape, dtype=bool)
         self.stood = np.zeros(self.spec.shape, dtype=bool)
         self.driven = np.zeros(self.spec.shape, dtype=bool)
@@ -126,6 +102,7 @@ class ExplorationMap:
         self.occupied = np.zeros(self.spec.shape, dtype=bool)
         self.bumped = np.zeros(self.spec.shape, dtype=bool)
         self.obstacle_hits = np.zeros(self.spec.shape, dtype=bool)  # a depth pixel landed at obstacle height
+        self._near_hits = np.zeros(self.spec.shape, dtype=bool)  # obstacle_hits widened by a cell
         self.revision = 0  # counts the changes below, so that what is derived from the map knows when to renew
 
     def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray,
@@ -140,18 +117,19 @@ class ExplorationMap:
         """
         config = self.config
         self.revision += 1
-        self.tsdf.integrate(depth, intrinsics, camera_to_world)
+        self.columns.renew(self.tsdf.integrate(depth, intrinsics, camera_to_world))
         # Only what the TSDF takes in may count as explored: a cell seen beyond its range could
         # never turn free, and a frontier that reaches it would vanish for good.
         in_range = (depth > 0) & (depth <= config.tsdf.depth_max)
         points = back_project(depth, intrinsics, camera_to_world, in_range)
         narrow = narrow_view_mask(*depth.shape)[in_range]
         at_height = (points[:, 2] >= config.obstacle_min_z) & (points[:, 2] <= config.obstacle_max_z)
-        self._mark(self.obstacle_hits, points[at_height])
-        self.floor_seen, occupied = project_columns(self.spec, self.tsdf.voxels(), config)
-        occupied &= ndimage.binary_dilation(self.obstacle_hits, structure=np.ones((3, 3), dtype=bool))
-        self.occupied = (occupied & ~self.driven) | self.bumped
-        self.stood |= self.spec.disc(robot_xy, config.near_field_radius) & ~self.occupied
+        self._mark_hits(points[at_height])
+        self.floor_seen = self.columns.floor.copy()
+        self.occupied = (self.columns.obstacle & self._near_hits & ~self.driven) | self.bumped
+        window = self.spec.disc_window(robot_xy, config.near_field_radius)
+        if window is not None:
+            self.stood[window[0]] |= window[1] & ~self.occupied[window[0]]
         self._mark(self.explored, points[narrow])
         self.explored |= self.stood
 
@@ -160,6 +138,20 @@ class ExplorationMap:
         cells = self.spec.to_cell(points[:, :2])
         cells = cells[self.spec.inside(cells)]
         grid[cells[:, 0], cells[:, 1]] = True
+
+    def _mark_hits(self, points: np.ndarray) -> None:
+        """Set the cells of ``obstacle_hits`` the points (N, 3) fall in, and in ``_near_hits`` the
+        same cells widened by one (dilating just the window the points fall in)."""
+        cells = self.spec.to_cell(points[:, :2])
+        cells = cells[self.spec.inside(cells)]
+        if len(cells) == 0:
+            return
+        self.obstacle_hits[cells[:, 0], cells[:, 1]] = True
+        low = np.maximum(cells.min(axis=0) - 1, 0)
+        high = np.minimum(cells.max(axis=0) + 2, self.spec.shape)
+        window = np.zeros(tuple(high - low), dtype=bool)
+        window[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+        self._near_hits[low[0]:high[0], low[1]:high[1]] |= ndimage.binary_dilation(window, structure=_EIGHT)
 
     def mark_driven(self, path_xy: np.ndarray) -> None:
         """Record the polyline (K, 2) the base drove along: no obstacle stands where the base has
@@ -174,10 +166,16 @@ class ExplorationMap:
         for start, end in zip(path[:-1], path[1:]):
             samples = max(int(np.ceil(np.hypot(*(end - start)) / step)), 1)
             for t in np.linspace(0.0, 1.0, samples + 1):
-                self.driven |= self.spec.disc(tuple(start + t * (end - start)), self.config.driven_radius)
+                self._mark_disc(self.driven, tuple(start + t * (end - start)), self.config.driven_radius)
         if len(path) == 1:
-            self.driven |= self.spec.disc(tuple(path[0]), self.config.driven_radius)
+            self._mark_disc(self.driven, tuple(path[0]), self.config.driven_radius)
         self.occupied &= ~self.driven | self.bumped
+
+    def _mark_disc(self, grid: np.ndarray, centre_xy: tuple[float, float], radius_m: float) -> None:
+        """Set the cells of ``grid`` within ``radius_m`` of a point."""
+        window = self.spec.disc_window(centre_xy, radius_m)
+        if window is not None:
+            grid[window[0]] |= window[1]
 
     def mark_contact(self, point_xy: tuple[float, float]) -> None:
         """Record an obstacle the robot touched but may never have seen (too low, too near).
@@ -186,7 +184,7 @@ class ExplorationMap:
             point_xy: where it touched (world, m).
         """
         self.revision += 1
-        self.bumped |= self.spec.disc(point_xy, self.spec.resolution)
+        self._mark_disc(self.bumped, point_xy, self.spec.resolution)
         self.occupied |= self.bumped
 
     @property

@@ -13,11 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from agent.mapping.tsdf import Voxels
 
-
-def surface_voxels(voxels: Voxels, max_pair_tsdf: float, near_tsdf: float) -> np.ndarray:
-    """A boolean mask over ``voxels``: true where a surface passes through the voxel.
+def surface_mask(field: np.ndarray, max_pair_tsdf: float, near_tsdf: float) -> np.ndarray:
+    """A boolean mask over a dense block of voxels: true where a surface passes through the voxel.
 
     A voxel is on a surface when the TSDF changes sign between it and a neighbour along x, y or z
     and it is the nearer of the two to the crossing (the smaller |tsdf|), or when its own value
@@ -28,23 +26,18 @@ def surface_voxels(voxels: Voxels, max_pair_tsdf: float, near_tsdf: float) -> np
     space just behind the jamb (small and negative), which would otherwise narrow every doorway
     seen at an angle.
 
+    A voxel's answer depends on it and its six neighbours only, so a mask computed over part of
+    the map is right everywhere but on that part's outer layer.
+
     Args:
-        voxels: the observed voxels (integer indices and normalised TSDF).
+        field: normalised TSDF values (X, Y, Z), NaN where no depth ray has reached.
         max_pair_tsdf: the largest |tsdf| the two voxels of a crossing may add up to.
         near_tsdf: a voxel with |tsdf| up to this is on a surface whatever its neighbours (half a
             voxel over the truncation distance: the surface passes through the voxel's cell).
 
     Returns:
-        A boolean array of length N.
+        The mask, shaped as ``field``.
     """
-    count = len(voxels.tsdf)
-    if count == 0:
-        return np.zeros(0, dtype=bool)
-    low = voxels.indices.min(axis=0)
-    shape = tuple(int(v) for v in voxels.indices.max(axis=0) - low + 1)
-    local = tuple((voxels.indices - low).T)
-    field = np.full(shape, np.nan, dtype=np.float32)
-    field[local] = voxels.tsdf
     magnitude = np.abs(field)
     on_surface = magnitude <= near_tsdf
     for axis in range(3):
@@ -58,4 +51,4 @@ def surface_voxels(voxels: Voxels, max_pair_tsdf: float, near_tsdf: float) -> np
         a_nearer = size_a <= size_b
         on_surface[tuple(here)] |= crossing & a_nearer
         on_surface[tuple(there)] |= crossing & ~a_nearer
-    return on_surface[local]
+    return on_surface

@@ -3,7 +3,9 @@
 VoxelBlockGrid is used rather than ScalableTSDFVolume because the latter integrates but extracts
 nothing in open3d 0.20. Only blocks near observed surfaces are allocated, so the grid stores
 surfaces and the truncation band around them; free space far from any surface is read off the 2D
-floor instead (see `agent.mapping.occupancy`).
+floor instead (see `agent.mapping.occupancy`). A frame updates only the blocks its depth reaches,
+and `integrate` says which, so that what is derived from the voxels is renewed there alone rather
+than read out of the whole volume every step (`agent.mapping.columns`).
 """
 
 from __future__ import annotations
@@ -29,28 +31,6 @@ class TsdfConfig:
     block_count: int = 40_000
 
 
-@dataclass(frozen=True)
-class Voxels:
-    """Observed voxels: integer lattice indices (N, 3), normalised TSDF in [-1, 1], fusion weights,
-    and the voxel size.
-
-    Voxel ``(i, j, k)`` is the TSDF sample at ``(i, j, k) * size`` metres. The indices are what to
-    compute with: open3d hands positions back as float32, and a position that should lie on a
-    lattice line comes out a hair to either side of it, so flooring it into a coarser grid puts
-    neighbouring voxels into one cell and leaves the next cell empty.
-    """
-
-    indices: np.ndarray
-    tsdf: np.ndarray
-    weight: np.ndarray
-    size: float
-
-    @property
-    def points(self) -> np.ndarray:
-        """Positions (N, 3) in metres, exact in float64."""
-        return self.indices * self.size
-
-
 class TsdfMap:
     """Fuses depth frames into a TSDF and hands back the observed voxels as plain arrays.
 
@@ -71,32 +51,58 @@ class TsdfMap:
             device=self._device,
         )
 
-    def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray) -> None:
+    def integrate(self, depth: np.ndarray, intrinsics: Intrinsics, camera_to_world: np.ndarray) -> np.ndarray:
         """Fuse one linear depth image (metres, 0 = no return) seen from ``camera_to_world``.
 
         Args:
             depth: the depth image.
             intrinsics: the camera's intrinsics.
             camera_to_world: the camera's world pose (4x4).
+
+        Returns:
+            The blocks the frame updated, as integer block coordinates (M, 3): no voxel outside
+            them changed, so what is derived from the voxels needs renewing only around them.
         """
+        cfg = self.config
+        if not np.any((depth > 0) & (depth <= cfg.depth_max)):
+            return np.zeros((0, 3), dtype=np.int64)  # open3d refuses a frame that reaches no block
         image = o3d.t.geometry.Image(o3c.Tensor(np.ascontiguousarray(depth, dtype=np.float32)))
         k = o3c.Tensor(intrinsics.matrix(), dtype=o3c.float64)
         extrinsic = o3c.Tensor(np.linalg.inv(camera_to_world), dtype=o3c.float64)
-        cfg = self.config
         blocks = self._grid.compute_unique_block_coordinates(
             image, k, extrinsic, 1.0, cfg.depth_max, cfg.trunc_voxels
         )
         self._grid.integrate(blocks, image, k, extrinsic, 1.0, cfg.depth_max, cfg.trunc_voxels)
+        return blocks.numpy().astype(np.int64).reshape(-1, 3)
 
-    def voxels(self) -> Voxels:
-        """Every voxel that some depth ray has updated.
+    def blocks(self) -> np.ndarray:
+        """Every allocated block's integer coordinates (N, 3); block ``b`` holds the voxels
+        ``b * block_resolution + (0..block_resolution-1)`` along each axis.
 
         Returns:
-            Their indices, TSDF values and weights.
+            The block coordinates.
         """
-        coords, indices = self._grid.voxel_coordinates_and_flattened_indices()
-        tsdf = self._grid.attribute("tsdf").reshape((-1,))[indices].numpy()
-        weight = self._grid.attribute("weight").reshape((-1,))[indices].numpy()
-        seen = weight > 0
-        indices = np.rint(coords.numpy()[seen] / self.config.voxel_size).astype(np.int64)
-        return Voxels(indices, tsdf[seen], weight[seen], self.config.voxel_size)
+        hashmap = self._grid.hashmap()
+        return hashmap.key_tensor()[hashmap.active_buf_indices()].numpy().astype(np.int64).reshape(-1, 3)
+
+    def fields(self, blocks: np.ndarray) -> np.ndarray:
+        """The normalised TSDF of some allocated blocks, for reading a part of the map cheaply.
+
+        Args:
+            blocks: integer block coordinates (M, 3), as `blocks` or `integrate` give them.
+
+        Returns:
+            The values (M, R, R, R) indexed ``[block, x, y, z]`` (R the block resolution), NaN
+            where no depth ray has reached the voxel.
+        """
+        resolution = self.config.block_resolution
+        blocks = np.asarray(blocks, dtype=np.int64).reshape(-1, 3)
+        if len(blocks) == 0:
+            return np.zeros((0, resolution, resolution, resolution), dtype=np.float32)
+        found, _ = self._grid.hashmap().find(o3c.Tensor(blocks.astype(np.int32)))
+        rows = found.numpy().astype(np.int64)
+        shape = (-1, resolution, resolution, resolution)
+        tsdf = self._grid.attribute("tsdf").numpy().reshape(shape)[rows]
+        weight = self._grid.attribute("weight").numpy().reshape(shape)[rows]
+        # open3d lays a block's voxels out as [z, y, x]
+        return np.where(weight > 0, tsdf, np.float32(np.nan)).transpose(0, 3, 2, 1)
