@@ -12,6 +12,7 @@ import numpy as np
 from scipy import ndimage
 
 from agent.mapping.grid import GridSpec
+from agent.planning.window import Window
 
 _EIGHT = np.ones((3, 3), dtype=bool)
 
@@ -33,6 +34,8 @@ def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.nda
                    min_unexplored_neighbours: int = 2) -> np.ndarray:
     """Reachable cells with at least that many 8-neighbours that are unexplored and not occupied.
 
+    Only the reachable cells' window and its ring of neighbours is read (`Window.bounding`).
+
     Args:
         reachable: the cells the robot can reach.
         explored: the cells seen.
@@ -42,14 +45,20 @@ def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.nda
     Returns:
         A boolean grid of the frontier cells.
     """
-    open_unknown = (~explored & ~occupied).astype(np.int32)
+    window = Window.bounding(reachable, margin=1)
+    if window is None:
+        return np.zeros(reachable.shape, dtype=bool)
+    open_unknown = (~window.crop(explored) & ~window.crop(occupied)).astype(np.int32)
     counts = ndimage.convolve(open_unknown, _EIGHT.astype(np.int32), mode="constant", cval=0) - open_unknown
-    return reachable & (counts >= min_unexplored_neighbours)
+    return window.paste(window.crop(reachable) & (counts >= min_unexplored_neighbours), False)
 
 
 def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
                       min_size: int = 3) -> list[Frontier]:
     """Group frontier cells into 8-connected clusters of at least ``min_size`` cells.
+
+    Clusters come in the order of their first cell row by row, each with its cells in that order.
+    Only the frontier cells' window and its ring of neighbours is read (`Window.bounding`).
 
     Args:
         spec: the grid.
@@ -61,16 +70,22 @@ def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarr
     Returns:
         The frontiers, each with its centre cell and its normal towards the unknown.
     """
-    labels, count = ndimage.label(cells_mask, structure=_EIGHT)
-    open_unknown = ~explored & ~occupied
+    window = Window.bounding(cells_mask, margin=1)
+    if window is None:
+        return []
+    labels, count = ndimage.label(window.crop(cells_mask), structure=_EIGHT)
+    open_unknown = ~window.crop(explored) & ~window.crop(occupied)
+    local = np.argwhere(labels)  # row by row; a stable sort by label keeps that order in each cluster
+    local = local[np.argsort(labels[local[:, 0], local[:, 1]], kind="stable")]
+    ends = np.cumsum(np.bincount(labels[local[:, 0], local[:, 1]], minlength=count + 1)[1:])
     frontiers = []
-    for index in range(1, count + 1):
-        cells = np.argwhere(labels == index)
-        if len(cells) < min_size:
+    for part in np.split(local, ends[:-1]):
+        if len(part) < min_size:
             continue
+        cells = part + np.asarray(window.corner)
         mean = cells.mean(axis=0)
         centre = tuple(int(v) for v in cells[np.argmin(np.hypot(*(cells - mean).T))])
-        frontiers.append(Frontier(cells, centre, _normal(cells, open_unknown)))
+        frontiers.append(Frontier(cells, centre, _normal(part, open_unknown)))
     return frontiers
 
 

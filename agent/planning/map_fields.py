@@ -6,6 +6,17 @@ from the robot over the cells it may drive. The map changes only when a frame is
 the base reports where it drove or bumped (`ExplorationMap.revision` counts those changes), so
 `MapFields` keeps what it computed for the map's current revision and hands the same arrays to
 every caller until the map changes. Callers only read what they are handed.
+
+Both are computed on a `Window` of the grid: the cells the map knows anything about, widened by
+``WINDOW_MARGIN_M``; the grid is laid for the largest home, and most of it stays unknown.
+Clearance there is exact, every occupied cell lying inside; outside it reads +inf, where the true
+distance exceeds the margin. What is read from clearance is compared with thresholds well below the
+margin (the robot's radius, less a squeeze, in `ExplorationMap.traversable`; that plus a tenth in
+`agent.planning.route.Routes`) or weighs only traversable cells (`clearance_cost`), which are known
+cells, so no answer changes. When nothing is occupied the clearance is the whole grid's, as
+before: with no obstacle the transform measures from beyond the grid's corner, not to +inf. The
+drive field searches the window with the robot's cell added (`distance_field`): every cell it may
+cross is a free cell, hence a known one.
 """
 
 from __future__ import annotations
@@ -14,31 +25,76 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from scipy import ndimage
+
 from agent.mapping.occupancy import ExplorationMap
 from agent.planning.paths import DistanceField, clearance_cost, distance_field
+from agent.planning.window import Window
 
 if TYPE_CHECKING:
     from agent.planning.frontier_plan import ExploreConfig
 
+#: How far beyond the cells the map knows the fields are computed: more than any clearance that
+#: planners compare with.
+WINDOW_MARGIN_M = 2.0
 
-def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance: np.ndarray,
-                config: ExploreConfig, squeeze_m: float = 0.0) -> tuple[DistanceField, np.ndarray]:
+
+def known_window(world_map: ExplorationMap, margin_m: float = WINDOW_MARGIN_M) -> Window | None:
+    """The cells the map knows anything about (explored, floor seen, occupied, stood on, driven,
+    bumped into, hit at obstacle height), widened by ``margin_m``; None when it knows nothing.
+
+    Args:
+        world_map: the robot's map.
+        margin_m: the margin on each side.
+
+    Returns:
+        The window, or None.
+    """
+    known = (world_map.explored | world_map.floor_seen | world_map.occupied | world_map.stood | world_map.driven
+             | world_map.bumped | world_map.obstacle_hits)
+    return Window.bounding(known, int(np.ceil(margin_m / world_map.spec.resolution)))
+
+
+def window_clearance(world_map: ExplorationMap, window: Window | None) -> np.ndarray:
+    """``world_map.clearance()`` in ``window`` (a `known_window`), +inf outside it.
+
+    Args:
+        world_map: the robot's map.
+        window: the map's known window.
+
+    Returns:
+        Metres from each cell to the nearest occupied cell (+inf outside the window).
+    """
+    if window is None or not world_map.occupied.any():
+        return world_map.clearance()
+    part = ndimage.distance_transform_edt(~window.crop(world_map.occupied)) * world_map.spec.resolution
+    return window.paste(part, np.inf)
+
+
+def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance_m: np.ndarray,
+                config: ExploreConfig, squeeze_m: float = 0.0,
+                window: Window | None = None) -> tuple[DistanceField, np.ndarray]:
     """Path costs from the robot over the cells it may drive (kept off walls where there is room).
 
     Args:
         world_map: the robot's map.
         robot_xy: where the robot stands (world x, y).
-        clearance: ``world_map.clearance()``, which callers often need too.
+        clearance_m: the map's clearance (`window_clearance`), which callers often need too.
         config: how far paths keep off obstacles and what coming nearer costs.
         squeeze_m: see `ExplorationMap.traversable`.
+        window: the map's known window (`known_window`); the whole grid when None.
 
     Returns:
         The distance field and the cells it was computed over.
     """
-    start = tuple(int(v) for v in world_map.spec.to_cell(np.asarray(robot_xy)))
-    cell_cost = clearance_cost(clearance, world_map.config.robot_radius, config.comfort_m, config.obstacle_cost)
-    traversable = world_map.traversable(robot_xy, clearance, squeeze_m)
-    return distance_field(world_map.spec, traversable, start, cell_cost), traversable
+    spec = world_map.spec
+    start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
+    whole = Window.whole(spec.shape)
+    window = whole if window is None or not whole.contains(start) else window.including(start)
+    traversable = world_map.traversable(robot_xy, clearance_m, squeeze_m)
+    cell_cost = clearance_cost(window.crop(clearance_m), world_map.config.robot_radius, config.comfort_m,
+                               config.obstacle_cost)
+    return distance_field(spec, window.crop(traversable), start, cell_cost, window), traversable
 
 
 class MapFields:
@@ -47,21 +103,23 @@ class MapFields:
     def __init__(self) -> None:
         self._map: ExplorationMap | None = None
         self._revision = -1
+        self._window: Window | None = None
         self._clearance: np.ndarray | None = None
         self._fields: dict[tuple[float, float, float, float, float], tuple[DistanceField, np.ndarray]] = {}
 
     def clearance(self, world_map: ExplorationMap) -> np.ndarray:
-        """``world_map.clearance()`` as the map stands now, computed once per revision.
+        """`window_clearance` of the map as it stands now, computed once per revision.
 
         Args:
             world_map: the robot's map.
 
         Returns:
-            Metres from each cell to the nearest occupied cell (not to be written to).
+            Metres from each cell to the nearest occupied cell, +inf far from all the map knows
+            (not to be written to).
         """
         self._follow(world_map)
         if self._clearance is None:
-            self._clearance = world_map.clearance()
+            self._clearance = window_clearance(world_map, self._window)
         return self._clearance
 
     def drive_field(self, world_map: ExplorationMap, robot_xy: tuple[float, float], config: ExploreConfig,
@@ -79,14 +137,15 @@ class MapFields:
         """
         xy = (float(robot_xy[0]), float(robot_xy[1]))
         key = (*xy, float(squeeze_m), float(config.comfort_m), float(config.obstacle_cost))
-        clearance = self.clearance(world_map)
+        clearance_m = self.clearance(world_map)
         if key not in self._fields:
-            self._fields[key] = drive_field(world_map, xy, clearance, config, squeeze_m)
+            self._fields[key] = drive_field(world_map, xy, clearance_m, config, squeeze_m, self._window)
         return self._fields[key]
 
     def _follow(self, world_map: ExplorationMap) -> None:
         """Forget what was computed for another map or an earlier revision of this one."""
         if world_map is not self._map or world_map.revision != self._revision:
             self._map, self._revision = world_map, world_map.revision
+            self._window = known_window(world_map)
             self._clearance = None
             self._fields = {}
