@@ -18,10 +18,10 @@ from scipy import ndimage
 from agent.mapping.camera import Intrinsics
 from agent.mapping.grid import GridSpec
 from agent.mapping.occupancy import ExplorationMap, OccupancyConfig
-from agent.planning.frontier import _normal, cluster_frontiers, frontier_cells
+from agent.planning.frontier import cluster_frontiers, frontier_cells
 from agent.planning.frontier_plan import ExploreConfig, reachable_frontiers
-from agent.planning.map_fields import WINDOW_MARGIN_M, MapFields, drive_field, known_window
-from agent.planning.paths import distance_field
+from agent.planning.map_fields import WINDOW_MARGIN_M, MapFields, known_window
+from agent.planning.paths import clearance_cost, distance_field
 from agent.planning.route import Routes, routes_from
 from agent.planning.window import Window
 from worlds.robot import CameraConfig
@@ -68,7 +68,7 @@ def frontier_oracle(reachable: np.ndarray, explored: np.ndarray, occupied: np.nd
 
 
 def cluster_oracle(mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray, min_size: int) -> list:
-    """(cells, centre, normal) of each cluster, one whole-grid mask per label."""
+    """(cells, centre, normal) of each cluster, one whole-grid mask per label, one cluster at a time."""
     labels, count = ndimage.label(mask, structure=np.ones((3, 3), dtype=bool))
     found = []
     for index in range(1, count + 1):
@@ -76,8 +76,20 @@ def cluster_oracle(mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
         if len(cells) >= min_size:
             mean = cells.mean(axis=0)
             centre = tuple(int(v) for v in cells[np.argmin(np.hypot(*(cells - mean).T))])
-            found.append((cells, centre, _normal(cells, ~explored & ~occupied)))
+            found.append((cells, centre, normal_oracle(cells, ~explored & ~occupied)))
     return found
+
+
+def normal_oracle(cells: np.ndarray, open_unknown: np.ndarray) -> np.ndarray:
+    """The mean step from the cells to their open unknown neighbours on the grid, as unit (x, y)."""
+    rows, cols = open_unknown.shape
+    total = np.zeros(2)
+    for dr, dc in [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0)]:
+        r, c = cells[:, 0] + dr, cells[:, 1] + dc
+        ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        total += np.count_nonzero(open_unknown[r[ok], c[ok]]) * np.array([dc, dr]) / np.hypot(dc, dr)
+    norm = np.hypot(*total)
+    return total / norm if norm > 0 else np.array([1.0, 0.0])
 
 
 def assert_same_clusters(frontiers: list, expected: list) -> None:
@@ -87,6 +99,15 @@ def assert_same_clusters(frontiers: list, expected: list) -> None:
         assert frontier.cells.dtype == cells.dtype
         assert frontier.centre == centre
         np.testing.assert_array_equal(frontier.normal, normal)
+
+
+def whole_grid_field(world_map: ExplorationMap, robot_xy: tuple[float, float], squeeze_m: float = 0.0):
+    """The drive field and traversable cells as computed over the whole grid, with its clearance."""
+    clearance = world_map.clearance()
+    traversable = world_map.traversable(robot_xy, clearance, squeeze_m)
+    cost = clearance_cost(clearance, world_map.config.robot_radius, CONFIG.comfort_m, CONFIG.obstacle_cost)
+    start = tuple(int(v) for v in world_map.spec.to_cell(np.asarray(robot_xy)))
+    return distance_field(world_map.spec, traversable, start, cost), traversable
 
 
 def assert_planning_as_on_the_whole_grid(world_map: ExplorationMap, robot_xy: tuple[float, float]) -> None:
@@ -103,14 +124,14 @@ def assert_planning_as_on_the_whole_grid(world_map: ExplorationMap, robot_xy: tu
         np.testing.assert_array_equal(clearance, whole)
     for squeeze_m in (0.0, 0.1):
         field, traversable = fields.drive_field(world_map, robot_xy, CONFIG, squeeze_m)
-        expected, expected_traversable = drive_field(world_map, robot_xy, whole, CONFIG, squeeze_m)
+        expected, expected_traversable = whole_grid_field(world_map, robot_xy, squeeze_m)
         np.testing.assert_array_equal(traversable, expected_traversable)
         np.testing.assert_array_equal(field.metres, expected.metres)
         reachable = np.argwhere(np.isfinite(field.metres))
         assert len(reachable) > 100
         for cell in map(tuple, reachable[::7]):
             np.testing.assert_array_equal(field.path_to(cell), expected.path_to(cell))
-    expected = drive_field(world_map, robot_xy, whole, CONFIG)[0]
+    expected = whole_grid_field(world_map, robot_xy)[0]
     routes = routes_from(world_map, np.asarray(robot_xy), CONFIG, fields=fields)
     expected_routes = Routes(expected, np.asarray(robot_xy), whole, world_map.config.robot_radius)
     np.testing.assert_array_equal(routes.standable(), expected_routes.standable())

@@ -74,32 +74,37 @@ def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarr
     if window is None:
         return []
     labels, count = ndimage.label(window.crop(cells_mask), structure=_EIGHT)
-    open_unknown = ~window.crop(explored) & ~window.crop(occupied)
     local = np.argwhere(labels)  # row by row; a stable sort by label keeps that order in each cluster
-    local = local[np.argsort(labels[local[:, 0], local[:, 1]], kind="stable")]
-    ends = np.cumsum(np.bincount(labels[local[:, 0], local[:, 1]], minlength=count + 1)[1:])
+    cluster = labels[local[:, 0], local[:, 1]]
+    order = np.argsort(cluster, kind="stable")
+    local, cluster = local[order], cluster[order]
+    totals = _normal_sums(local, cluster, count, ~window.crop(explored) & ~window.crop(occupied))
+    norms = np.hypot(totals[:, 0], totals[:, 1])
+    ends = np.cumsum(np.bincount(cluster, minlength=count + 1)[1:])
     frontiers = []
-    for part in np.split(local, ends[:-1]):
+    for index, part in enumerate(np.split(local, ends[:-1])):
         if len(part) < min_size:
             continue
         cells = part + np.asarray(window.corner)
         mean = cells.mean(axis=0)
         centre = tuple(int(v) for v in cells[np.argmin(np.hypot(*(cells - mean).T))])
-        frontiers.append(Frontier(cells, centre, _normal(part, open_unknown)))
+        normal = totals[index] / norms[index] if norms[index] > 0 else np.array([1.0, 0.0])
+        frontiers.append(Frontier(cells, centre, normal))
     return frontiers
 
 
-def _normal(cells: np.ndarray, open_unknown: np.ndarray) -> np.ndarray:
-    """Mean direction from the cluster's cells to their unexplored neighbours, as unit (x, y)."""
-    rows, cols = open_unknown.shape
-    total = np.zeros(2)
+def _normal_sums(cells: np.ndarray, cluster: np.ndarray, count: int, open_unknown: np.ndarray) -> np.ndarray:
+    """Per cluster (count, 2), the sum over its cells of the unit (x, y) steps to their neighbours
+    that are open unknown: the direction of its normal. ``cells`` (K, 2) lie in ``open_unknown``'s
+    window, whose ring of neighbours holds theirs unless the grid ends there; ``cluster`` (K,) are
+    their labels, 1 to ``count``."""
+    padded = np.pad(open_unknown, 1)  # nothing beyond the grid is open unknown
+    totals = np.zeros((count, 2))
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             if dr == dc == 0:
                 continue
-            r, c = cells[:, 0] + dr, cells[:, 1] + dc
-            ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-            hits = np.count_nonzero(open_unknown[r[ok], c[ok]])
-            total += hits * np.array([dc, dr]) / np.hypot(dc, dr)
-    norm = np.hypot(*total)
-    return total / norm if norm > 0 else np.array([1.0, 0.0])
+            hit = padded[cells[:, 0] + 1 + dr, cells[:, 1] + 1 + dc]
+            hits = np.bincount(cluster[hit], minlength=count + 1)[1:]
+            totals += hits[:, None] * np.array([dc, dr]) / np.hypot(dc, dr)
+    return totals

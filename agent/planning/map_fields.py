@@ -7,16 +7,15 @@ the base reports where it drove or bumped (`ExplorationMap.revision` counts thos
 `MapFields` keeps what it computed for the map's current revision and hands the same arrays to
 every caller until the map changes. Callers only read what they are handed.
 
-Both are computed on a `Window` of the grid: the cells the map knows anything about, widened by
-``WINDOW_MARGIN_M``; the grid is laid for the largest home, and most of it stays unknown.
-Clearance there is exact, every occupied cell lying inside; outside it reads +inf, where the true
-distance exceeds the margin. What is read from clearance is compared with thresholds well below the
+Neither covers the whole grid, which is laid for the largest home and stays mostly unknown. The
+drive field searches the box of the cells the robot may cross and its own (`distance_field`).
+Clearance is computed on the `known_window`: the cells the map knows anything about, widened by
+``WINDOW_MARGIN_M``. It is exact there, every occupied cell lying inside, and reads +inf outside,
+where the true distance exceeds the margin. Clearance is compared with thresholds well below the
 margin (the robot's radius, less a squeeze, in `ExplorationMap.traversable`; that plus a tenth in
-`agent.planning.route.Routes`) or weighs only traversable cells (`clearance_cost`), which are known
-cells, so no answer changes. When nothing is occupied the clearance is the whole grid's, as
-before: with no obstacle the transform measures from beyond the grid's corner, not to +inf. The
-drive field searches the window with the robot's cell added (`distance_field`): every cell it may
-cross is a free cell, hence a known one.
+`agent.planning.route.Routes`) or weighs traversable cells alone (`clearance_cost`), which are
+known cells, so no answer changes. With nothing occupied the whole grid's transform is kept: it
+then measures from beyond the grid's corner, not to +inf.
 """
 
 from __future__ import annotations
@@ -24,7 +23,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-
 from scipy import ndimage
 
 from agent.mapping.occupancy import ExplorationMap
@@ -55,16 +53,17 @@ def known_window(world_map: ExplorationMap, margin_m: float = WINDOW_MARGIN_M) -
     return Window.bounding(known, int(np.ceil(margin_m / world_map.spec.resolution)))
 
 
-def window_clearance(world_map: ExplorationMap, window: Window | None) -> np.ndarray:
-    """``world_map.clearance()`` in ``window`` (a `known_window`), +inf outside it.
+def window_clearance(world_map: ExplorationMap) -> np.ndarray:
+    """``world_map.clearance()`` in its `known_window`, +inf outside it (the whole grid's when
+    nothing is occupied).
 
     Args:
         world_map: the robot's map.
-        window: the map's known window.
 
     Returns:
-        Metres from each cell to the nearest occupied cell (+inf outside the window).
+        Metres from each cell to the nearest occupied cell (+inf far from all the map knows).
     """
+    window = known_window(world_map)
     if window is None or not world_map.occupied.any():
         return world_map.clearance()
     part = ndimage.distance_transform_edt(~window.crop(world_map.occupied)) * world_map.spec.resolution
@@ -72,9 +71,10 @@ def window_clearance(world_map: ExplorationMap, window: Window | None) -> np.nda
 
 
 def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], clearance_m: np.ndarray,
-                config: ExploreConfig, squeeze_m: float = 0.0,
-                window: Window | None = None) -> tuple[DistanceField, np.ndarray]:
+                config: ExploreConfig, squeeze_m: float = 0.0) -> tuple[DistanceField, np.ndarray]:
     """Path costs from the robot over the cells it may drive (kept off walls where there is room).
+
+    The search covers the box of those cells and the robot's own (`distance_field`).
 
     Args:
         world_map: the robot's map.
@@ -82,16 +82,17 @@ def drive_field(world_map: ExplorationMap, robot_xy: tuple[float, float], cleara
         clearance_m: the map's clearance (`window_clearance`), which callers often need too.
         config: how far paths keep off obstacles and what coming nearer costs.
         squeeze_m: see `ExplorationMap.traversable`.
-        window: the map's known window (`known_window`); the whole grid when None.
 
     Returns:
         The distance field and the cells it was computed over.
     """
     spec = world_map.spec
     start = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy)))
-    whole = Window.whole(spec.shape)
-    window = whole if window is None or not whole.contains(start) else window.including(start)
     traversable = world_map.traversable(robot_xy, clearance_m, squeeze_m)
+    window = Window.whole(spec.shape)
+    if window.contains(start):  # off the grid, `distance_field` refuses the start
+        box = Window.bounding(traversable)
+        window = Window.cell(start, spec.shape) if box is None else box.including(start)
     cell_cost = clearance_cost(window.crop(clearance_m), world_map.config.robot_radius, config.comfort_m,
                                config.obstacle_cost)
     return distance_field(spec, window.crop(traversable), start, cell_cost, window), traversable
@@ -103,7 +104,6 @@ class MapFields:
     def __init__(self) -> None:
         self._map: ExplorationMap | None = None
         self._revision = -1
-        self._window: Window | None = None
         self._clearance: np.ndarray | None = None
         self._fields: dict[tuple[float, float, float, float, float], tuple[DistanceField, np.ndarray]] = {}
 
@@ -119,7 +119,7 @@ class MapFields:
         """
         self._follow(world_map)
         if self._clearance is None:
-            self._clearance = window_clearance(world_map, self._window)
+            self._clearance = window_clearance(world_map)
         return self._clearance
 
     def drive_field(self, world_map: ExplorationMap, robot_xy: tuple[float, float], config: ExploreConfig,
@@ -139,13 +139,12 @@ class MapFields:
         key = (*xy, float(squeeze_m), float(config.comfort_m), float(config.obstacle_cost))
         clearance_m = self.clearance(world_map)
         if key not in self._fields:
-            self._fields[key] = drive_field(world_map, xy, clearance_m, config, squeeze_m, self._window)
+            self._fields[key] = drive_field(world_map, xy, clearance_m, config, squeeze_m)
         return self._fields[key]
 
     def _follow(self, world_map: ExplorationMap) -> None:
         """Forget what was computed for another map or an earlier revision of this one."""
         if world_map is not self._map or world_map.revision != self._revision:
             self._map, self._revision = world_map, world_map.revision
-            self._window = known_window(world_map)
             self._clearance = None
             self._fields = {}

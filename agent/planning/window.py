@@ -36,6 +36,20 @@ class Window:
         return cls(0, int(shape[0]), 0, int(shape[1]), (int(shape[0]), int(shape[1])))
 
     @classmethod
+    def cell(cls, cell: tuple[int, int], shape: tuple[int, int]) -> Window:
+        """The window of one cell.
+
+        Args:
+            cell: the cell (row, col).
+            shape: the grid's (rows, cols).
+
+        Returns:
+            The window.
+        """
+        row, col = int(cell[0]), int(cell[1])
+        return cls(row, row + 1, col, col + 1, (int(shape[0]), int(shape[1])))
+
+    @classmethod
     def bounding(cls, mask: np.ndarray, margin: int = 0) -> Window | None:
         """The smallest window holding every true cell of ``mask``, widened by ``margin`` cells on
         each side and cut to the grid; None when no cell is true.
