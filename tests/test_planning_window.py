@@ -1,4 +1,6 @@
-"""Planning on the map's known window gives what planning on the whole grid gives, to the bit.
+"""Planning on the map's known window gives what planning on the whole grid gives, to the bit:
+clearance, drive fields and their paths, routes, frontiers, and the free cells prompt points are
+drawn from.
 
 Maps are fused from real PyBullet frames (the start room seen in eight headings, the base then
 driving a little way) into grids of several sizes, one of them so small that the room runs off
@@ -10,6 +12,7 @@ here for frontiers.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -22,6 +25,7 @@ from agent.planning.frontier import cluster_frontiers, frontier_cells
 from agent.planning.frontier_plan import ExploreConfig, reachable_frontiers
 from agent.planning.map_fields import WINDOW_MARGIN_M, MapFields, known_window
 from agent.planning.paths import clearance_cost, distance_field
+from agent.planning.prompt_points import PromptPointConfig, visible_free_cells
 from agent.planning.route import Routes, routes_from
 from agent.planning.window import Window
 from worlds.robot import CameraConfig
@@ -164,6 +168,22 @@ def test_a_room_running_off_the_grid_plans_as_on_the_whole_grid(frames, size_m, 
     edges = np.concatenate([world_map.explored[[0, -1], :].ravel(), world_map.explored[:, [0, -1]].ravel()])
     assert edges.any(), "the map reaches the grid's edge"
     assert_planning_as_on_the_whole_grid(world_map, frames[0])
+
+
+@pytest.mark.parametrize(("size_m", "offset_xy"), [(48.0, (0.0, 0.0)), (6.0, (-1.8, 0.8))])
+def test_prompt_point_candidates_are_the_whole_grids(frames, size_m, offset_xy) -> None:
+    """Free cells in range are looked for around the robot only: the same cells, in the same order."""
+    world_map = fused(frames, offset_xy, size_m)
+    robot_xy, taken, intrinsics = frames
+    near = PromptPointConfig(min_distance_m=0.5, max_distance_m=2.5)
+    for depth, pose in taken:
+        xy, pixels = visible_free_cells(world_map, robot_xy, depth, intrinsics, pose, near)
+        all_xy, all_pixels = visible_free_cells(world_map, robot_xy, depth, intrinsics, pose,
+                                                replace(near, max_distance_m=1000.0))
+        kept = np.hypot(all_xy[:, 0] - robot_xy[0], all_xy[:, 1] - robot_xy[1]) <= near.max_distance_m
+        np.testing.assert_array_equal(xy, all_xy[kept])
+        np.testing.assert_array_equal(pixels, all_pixels[kept])
+        assert len(xy) > 0
 
 
 def test_a_map_with_no_obstacle_plans_as_on_the_whole_grid() -> None:
