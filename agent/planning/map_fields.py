@@ -32,7 +32,7 @@ from agent.planning.window import Window
 if TYPE_CHECKING:
     from agent.planning.frontier_plan import ExploreConfig
 
-#: How far beyond the cells the map knows the fields are computed: more than any clearance that
+#: How far beyond the cells the map knows clearance is computed: more than any clearance that
 #: planners compare with.
 WINDOW_MARGIN_M = 2.0
 

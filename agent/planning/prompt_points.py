@@ -73,9 +73,9 @@ def visible_free_cells(world_map: ExplorationMap, robot_xy: tuple[float, float],
         The points and their pixels.
     """
     spec = world_map.spec
-    window = Window.whole(spec.shape)
+    window = Window.whole(spec.shape)  # narrowed to the box round the robot outside which all is out of range
     robot_cell = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy, dtype=float)))
-    if window.contains(robot_cell):  # no farther cell can be in range
+    if window.contains(robot_cell):
         window = Window.cell(robot_cell, spec.shape).widened(int(np.ceil(config.max_distance_m / spec.resolution)) + 1)
     xy = spec.to_world(np.argwhere(window.crop(world_map.free)) + np.asarray(window.corner))
     distance = np.hypot(xy[:, 0] - robot_xy[0], xy[:, 1] - robot_xy[1])
