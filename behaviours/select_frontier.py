@@ -99,9 +99,7 @@ class SelectFrontier(py_trees.behaviour.Behaviour):
         """The semantic methods' log w_p of the candidates; None for FBE, or when there are none."""
         if not (self.semantic and candidates.frontiers):
             return None
-        semantic_map = self.blackboard.get(bb.SEMANTIC_MAP)
-        return frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
-                                    self.weights, semantic_map.default)
+        return frontier_log_weights(candidates.frontiers, self.blackboard.get(bb.SEMANTIC_MAP), self.weights)
 
     def _learned_choice(self, world_map: ExplorationMap, robot_xy: tuple[float, float], candidates: Candidates) -> int:
         from agent.lfe.estimator import LearnedEstimator

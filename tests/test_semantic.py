@@ -266,6 +266,17 @@ def test_second_update_at_the_same_place_averages() -> None:
     np.testing.assert_allclose(both.values(), semantic_map.values())
 
 
+def test_values_at_some_cells_are_the_whole_maps_to_the_bit() -> None:
+    spec = GridSpec((0.0, 0.0), 0.1, (60, 80))
+    semantic_map = SemanticMap(spec, default=1.7)
+    rng = np.random.default_rng(5)
+    semantic_map.update(rng.uniform(0.0, 6.0, (7, 2)), rng.uniform(0.5, 4.0, 7))
+    cells = np.argwhere(np.ones(spec.shape, dtype=bool))[rng.permutation(60 * 80)[:500]]
+    values = semantic_map.values()
+    np.testing.assert_array_equal(semantic_map.values_at(cells), values[cells[:, 0], cells[:, 1]])
+    assert semantic_map.values_at(np.array([12, 3]))[0] == values[12, 3]
+
+
 def test_map_update_at_the_edge_and_outside_the_grid() -> None:
     spec = GridSpec((0.0, 0.0), 0.1, (20, 20))
     semantic_map = SemanticMap(spec, default=1.0)
@@ -332,15 +343,15 @@ def test_a_frontier_facing_a_valued_region_outweighs_one_facing_neutral_space() 
     semantic_map.update(target[None, :], [float(semantic_value(1.0, 1.0))])
     values = semantic_map.values()
     assert values[left.centre] == values[right.centre] == semantic_map.default
-    logs = frontier_log_weights([left, right], values, spec, FrontierWeightConfig(), semantic_map.default)
+    logs = frontier_log_weights([left, right], semantic_map, FrontierWeightConfig())
     assert logs[1] > logs[0]
     assert logs[0] == pytest.approx(2 * semantic_map.default)  # neutral everywhere it looks
 
 
 def test_log_weights_follow_eq_a6_on_a_constant_map() -> None:
     spec, frontiers = band_frontiers()
-    values = np.full(spec.shape, 3.0)
-    logs = frontier_log_weights(frontiers, values, spec, FrontierWeightConfig(tau_sv=2.0, tau_sv_normal=0.5))
+    constant = SemanticMap(spec, default=3.0)  # nothing written: the default everywhere
+    logs = frontier_log_weights(frontiers, constant, FrontierWeightConfig(tau_sv=2.0, tau_sv_normal=0.5))
     np.testing.assert_allclose(logs, 2.0 * 3.0 + 0.5 * 3.0)
 
 
@@ -382,8 +393,7 @@ def test_sampled_choice_on_reachable_frontiers_follows_the_weights() -> None:
     semantic_map = ExploreStrategy.of("semantic").new_semantic_map(world_map.spec)
     beyond = world_map.spec.to_world(np.array(candidates.frontiers[right].centre)) + [1.5, 0.0]
     semantic_map.update(beyond[None, :], [float(semantic_value(1.0, 1.0))])
-    logs = frontier_log_weights(candidates.frontiers, semantic_map.values(), semantic_map.spec,
-                                FrontierWeightConfig(), semantic_map.default)
+    logs = frontier_log_weights(candidates.frontiers, semantic_map, FrontierWeightConfig())
     assert frontier_probabilities(logs)[right] > 0.6
     centres = world_map.spec.to_world(np.array([f.centre for f in candidates.frontiers]))
     rng = np.random.default_rng(0)

@@ -12,6 +12,7 @@ import numpy as np
 from scipy import ndimage
 
 from agent.mapping.grid import GridSpec
+from agent.planning.window import Window
 
 _EIGHT = np.ones((3, 3), dtype=bool)
 
@@ -33,6 +34,8 @@ def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.nda
                    min_unexplored_neighbours: int = 2) -> np.ndarray:
     """Reachable cells with at least that many 8-neighbours that are unexplored and not occupied.
 
+    Only the reachable cells' window and its ring of neighbours is read (`Window.bounding`).
+
     Args:
         reachable: the cells the robot can reach.
         explored: the cells seen.
@@ -42,14 +45,20 @@ def frontier_cells(reachable: np.ndarray, explored: np.ndarray, occupied: np.nda
     Returns:
         A boolean grid of the frontier cells.
     """
-    open_unknown = (~explored & ~occupied).astype(np.int32)
+    window = Window.bounding(reachable, margin=1)
+    if window is None:
+        return np.zeros(reachable.shape, dtype=bool)
+    open_unknown = (~window.crop(explored) & ~window.crop(occupied)).astype(np.int32)
     counts = ndimage.convolve(open_unknown, _EIGHT.astype(np.int32), mode="constant", cval=0) - open_unknown
-    return reachable & (counts >= min_unexplored_neighbours)
+    return window.paste(window.crop(reachable) & (counts >= min_unexplored_neighbours), False)
 
 
 def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarray, occupied: np.ndarray,
                       min_size: int = 3) -> list[Frontier]:
     """Group frontier cells into 8-connected clusters of at least ``min_size`` cells.
+
+    Clusters come in the order of their first cell row by row, each with its cells in that order.
+    Only the frontier cells' window and its ring of neighbours is read (`Window.bounding`).
 
     Args:
         spec: the grid.
@@ -61,30 +70,41 @@ def cluster_frontiers(spec: GridSpec, cells_mask: np.ndarray, explored: np.ndarr
     Returns:
         The frontiers, each with its centre cell and its normal towards the unknown.
     """
-    labels, count = ndimage.label(cells_mask, structure=_EIGHT)
-    open_unknown = ~explored & ~occupied
+    window = Window.bounding(cells_mask, margin=1)
+    if window is None:
+        return []
+    labels, count = ndimage.label(window.crop(cells_mask), structure=_EIGHT)
+    local = np.argwhere(labels)  # row by row; a stable sort by label keeps that order in each cluster
+    cluster = labels[local[:, 0], local[:, 1]]
+    order = np.argsort(cluster, kind="stable")
+    local, cluster = local[order], cluster[order]
+    totals = _normal_sums(local, cluster, count, ~window.crop(explored) & ~window.crop(occupied))
+    norms = np.hypot(totals[:, 0], totals[:, 1])
+    ends = np.cumsum(np.bincount(cluster, minlength=count + 1)[1:])
     frontiers = []
-    for index in range(1, count + 1):
-        cells = np.argwhere(labels == index)
-        if len(cells) < min_size:
+    for index, part in enumerate(np.split(local, ends[:-1])):
+        if len(part) < min_size:
             continue
+        cells = part + np.asarray(window.corner)
         mean = cells.mean(axis=0)
         centre = tuple(int(v) for v in cells[np.argmin(np.hypot(*(cells - mean).T))])
-        frontiers.append(Frontier(cells, centre, _normal(cells, open_unknown)))
+        normal = totals[index] / norms[index] if norms[index] > 0 else np.array([1.0, 0.0])
+        frontiers.append(Frontier(cells, centre, normal))
     return frontiers
 
 
-def _normal(cells: np.ndarray, open_unknown: np.ndarray) -> np.ndarray:
-    """Mean direction from the cluster's cells to their unexplored neighbours, as unit (x, y)."""
-    rows, cols = open_unknown.shape
-    total = np.zeros(2)
+def _normal_sums(cells: np.ndarray, cluster: np.ndarray, count: int, open_unknown: np.ndarray) -> np.ndarray:
+    """Per cluster (count, 2), the sum over its cells of the unit (x, y) steps to their neighbours
+    that are open unknown: the direction of its normal. ``cells`` (K, 2) lie in ``open_unknown``'s
+    window, whose ring of neighbours holds theirs unless the grid ends there; ``cluster`` (K,) are
+    their labels, 1 to ``count``."""
+    padded = np.pad(open_unknown, 1)  # nothing beyond the grid is open unknown
+    totals = np.zeros((count, 2))
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             if dr == dc == 0:
                 continue
-            r, c = cells[:, 0] + dr, cells[:, 1] + dc
-            ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-            hits = np.count_nonzero(open_unknown[r[ok], c[ok]])
-            total += hits * np.array([dc, dr]) / np.hypot(dc, dr)
-    norm = np.hypot(*total)
-    return total / norm if norm > 0 else np.array([1.0, 0.0])
+            hit = padded[cells[:, 0] + 1 + dr, cells[:, 1] + 1 + dc]
+            hits = np.bincount(cluster[hit], minlength=count + 1)[1:]
+            totals += hits[:, None] * np.array([dc, dr]) / np.hypot(dc, dr)
+    return totals

@@ -8,16 +8,21 @@ import numpy as np
 from skimage.graph import MCP_Geometric
 
 from agent.mapping.grid import GridSpec
+from agent.planning.window import Window
 
 
 @dataclass(frozen=True)
 class DistanceField:
-    """Path costs in (weighted) metres from one start cell to every cell (inf where unreachable)."""
+    """Path costs in (weighted) metres from one start cell to every cell (inf where unreachable).
+
+    ``metres`` covers the whole grid; the search behind it may have covered only a part of it,
+    whose first cell is grid cell ``corner``."""
 
     spec: GridSpec
     start: tuple[int, int]
     metres: np.ndarray
     _mcp: MCP_Geometric
+    corner: tuple[int, int] = (0, 0)
 
     def path_to(self, cell: tuple[int, int]) -> np.ndarray:
         """The cells (K, 2) from the start to ``cell``; raises ValueError if it is unreachable.
@@ -33,30 +38,49 @@ class DistanceField:
         """
         if not np.isfinite(self.metres[cell]):
             raise ValueError(f"cell {cell} is not reachable from {self.start}")
-        return np.asarray(self._mcp.traceback(cell), dtype=int)
+        corner = np.asarray(self.corner)
+        return np.asarray(self._mcp.traceback(tuple(np.asarray(cell) - corner)), dtype=int) + corner
 
 
 def distance_field(spec: GridSpec, traversable: np.ndarray, start: tuple[int, int],
-                   cell_cost: np.ndarray | None = None) -> DistanceField:
+                   cell_cost: np.ndarray | None = None, window: Window | None = None) -> DistanceField:
     """Dijkstra over 8-connected traversable cells (diagonals cost √2 cells).
 
     ``cell_cost`` (≥ 1) weighs cells, e.g. to keep paths off walls; the field is then in weighted
     metres, which equal true metres along paths that stay clear.
 
+    With a ``window`` holding the start and every traversable cell, ``traversable`` and
+    ``cell_cost`` are its crops (`Window.crop`) and the search covers the window alone; the field
+    is the one over the whole grid, paths and their ties included. The search never enters an
+    impassable cell, it skips a neighbour off the window as it skips an impassable one, and which
+    of two equal costs it settles first depends on the order it met them in, never on where they
+    lie.
+
     Args:
         spec: the grid.
-        traversable: the cells the robot may cross.
-        start: the robot's cell (row, col).
-        cell_cost: each cell's weight (1 everywhere when None).
+        traversable: the cells the robot may cross (the window's, with a window).
+        start: the robot's cell (row, col) on the grid.
+        cell_cost: each cell's weight (1 everywhere when None), of ``traversable``'s shape.
+        window: the part of the grid searched (the whole grid when None).
 
     Returns:
-        The field: metres from the start to every cell (inf where unreachable).
+        The field: metres from the start to every cell of the grid (inf where unreachable).
+
+    Raises:
+        ValueError: the start lies outside the window.
     """
+    window = Window.whole(spec.shape) if window is None else window
+    if not window.contains(start):
+        raise ValueError(f"start cell {start} lies outside the window searched ({window})")
+    local = (start[0] - window.top, start[1] - window.left)
     costs = np.where(traversable, 1.0 if cell_cost is None else cell_cost, np.inf)
-    costs[start] = 1.0  # the robot stands there, whatever the map says
+    costs[local] = 1.0  # the robot stands there, whatever the map says
     mcp = MCP_Geometric(costs, fully_connected=True)
-    cumulative, _ = mcp.find_costs([start])
-    return DistanceField(spec, start, cumulative * spec.resolution, mcp)
+    cumulative, _ = mcp.find_costs([local])
+    metres = cumulative * spec.resolution
+    if metres.shape != spec.shape:
+        metres = window.paste(metres, np.inf)
+    return DistanceField(spec, start, metres, mcp, window.corner)
 
 
 def clearance_cost(clearance_m: np.ndarray, radius_m: float, comfort_m: float, obstacle_cost: float) -> np.ndarray:

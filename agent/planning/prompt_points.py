@@ -28,6 +28,7 @@ import numpy as np
 
 from agent.mapping.camera import Intrinsics
 from agent.mapping.occupancy import ExplorationMap
+from agent.planning.window import Window
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,11 @@ def visible_free_cells(world_map: ExplorationMap, robot_xy: tuple[float, float],
         The points and their pixels.
     """
     spec = world_map.spec
-    xy = spec.to_world(np.argwhere(world_map.free))
+    window = Window.whole(spec.shape)  # narrowed to the box round the robot outside which all is out of range
+    robot_cell = tuple(int(v) for v in spec.to_cell(np.asarray(robot_xy, dtype=float)))
+    if window.contains(robot_cell):
+        window = Window.cell(robot_cell, spec.shape).widened(int(np.ceil(config.max_distance_m / spec.resolution)) + 1)
+    xy = spec.to_world(np.argwhere(window.crop(world_map.free)) + np.asarray(window.corner))
     distance = np.hypot(xy[:, 0] - robot_xy[0], xy[:, 1] - robot_xy[1])
     xy = xy[(distance >= config.min_distance_m) & (distance <= config.max_distance_m)]
     floor = np.column_stack([xy, np.full(len(xy), config.floor_z), np.ones(len(xy))])

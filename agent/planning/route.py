@@ -30,7 +30,8 @@ STAND_MARGIN_M = 0.1
 @dataclass(frozen=True)
 class Routes:
     """Every path from one start (world x, y): whether it `reaches` a place, the waypoints `to` it.
-    ``clearance``: metres from each cell to the nearest obstacle on the map."""
+    ``clearance``: metres from each cell to the nearest obstacle on the map (+inf far from all
+    the map knows, where it exceeds every margin asked of it: `agent.planning.map_fields`)."""
 
     field: DistanceField
     start_xy: np.ndarray

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.mapping.grid import GridSpec
+from agent.mapping.semantic_map import SemanticMap
 from agent.planning.frontier import Frontier
 
 
@@ -45,27 +46,26 @@ def normal_ray_cells(spec: GridSpec, frontier: Frontier, d_sv_m: float) -> np.nd
     return cells[spec.inside(cells)]
 
 
-def frontier_log_weights(frontiers: Sequence[Frontier], values: np.ndarray, spec: GridSpec,
-                         config: FrontierWeightConfig = FrontierWeightConfig(),
-                         default: float = 1.0) -> np.ndarray:
-    """log w_p = τ_SV·SV_p + τ_SV,normal·SV_p,normal for each frontier, from a grid of SVs.
+def frontier_log_weights(frontiers: Sequence[Frontier], semantic_map: SemanticMap,
+                         config: FrontierWeightConfig = FrontierWeightConfig()) -> np.ndarray:
+    """log w_p = τ_SV·SV_p + τ_SV,normal·SV_p,normal for each frontier, from the semantic map.
 
     Weights are returned as exponents because with larger temperatures exp() overflows; a ray that
-    leaves the grid at once reads ``default`` (pass the semantic map's).
+    leaves the grid at once reads the map's default. Only the cells read are evaluated
+    (`SemanticMap.values_at`).
 
     Args:
         frontiers: the frontiers.
-        values: the semantic values per cell.
-        spec: the grid.
+        semantic_map: the semantic values, on the frontiers' grid.
         config: the temperatures τ and the ray's length.
-        default: the value read for a ray with no cell on the grid.
 
     Returns:
         log w per frontier.
     """
     logs = np.zeros(len(frontiers))
     for i, frontier in enumerate(frontiers):
-        ray = normal_ray_cells(spec, frontier, config.d_sv_m)
-        along = float(values[ray[:, 0], ray[:, 1]].mean()) if len(ray) else default
-        logs[i] = config.tau_sv * float(values[frontier.centre]) + config.tau_sv_normal * along
+        ray = normal_ray_cells(semantic_map.spec, frontier, config.d_sv_m)
+        along = float(semantic_map.values_at(ray).mean()) if len(ray) else semantic_map.default
+        here = float(semantic_map.values_at(np.asarray(frontier.centre))[0])
+        logs[i] = config.tau_sv * here + config.tau_sv_normal * along
     return logs
