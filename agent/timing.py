@@ -14,7 +14,8 @@ import numpy as np
 
 
 class StageTimer:
-    """Collects durations in milliseconds by stage name."""
+    """Collects durations in milliseconds by stage name, each stage's in the order they were recorded
+    (a stage timed once a step, such as the map's, holds the steps in order)."""
 
     def __init__(self) -> None:
         self.samples: dict[str, list[float]] = defaultdict(list)

@@ -1,76 +1,12 @@
-"""`homebot bench …`: figures to compare across runs, never assertions."""
+"""`homebot bench …`: figures to compare across runs, never assertions (the step bench is in `step`)."""
 
 from __future__ import annotations
 
 import json
-import tempfile
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from agent.app.config import Config, load_config
-from agent.app.runtime.run import RunRequest, run_episode
-from agent.timing import StageTimer
-from worlds.home import generate_home
-from worlds.spec import dump_spec
-
-STAGES = ("render", "transport", "tsdf", "planning", "vlm", "tick")
-
-
-def bench_step(config: Config, seed: int, area_m2: float | None = None) -> dict[str, Any]:
-    """Run one fixed episode (the seed's home, or one of ``area_m2``) with per-stage timing.
-
-    The episode explores to its budget whatever the stopping rule, so runs compare the same steps.
-
-    Args:
-        config: the settings (the stopping rule is set to the budget).
-        seed: the home's and the episode's seed.
-        area_m2: the home's floor area (the seed's own when None).
-
-    Returns:
-        The report: the home, the episode's time and status, the size of its snapshot log, and each
-        stage's timing.
-    """
-    config = load_config(overrides=["stop.rule=budget"], base=config)
-    timer = StageTimer()
-    home = generate_home(seed, area_m2=area_m2)
-    with tempfile.TemporaryDirectory(prefix="homebot-bench-") as scratch:
-        request = RunRequest(seed=seed, config=config, out_root=Path(scratch), scene=dump_spec(home), save_map=False,
-                             record=False)
-        result = run_episode(request, timer=timer)
-        snapshot_bytes = (Path(result["folder"]) / "snapshots.jsonl").stat().st_size
-    summary = timer.summary()
-    steps = max(1, result.get("steps", 0))
-    return {"seed": seed, "area_m2": round(home.area_m2, 1), "rooms": len(home.rooms),
-            "steps": result.get("steps", 0), "status": result["status"],
-            "episode_s": result["seconds"], "per_step_ms": 1000.0 * result["seconds"] / steps,
-            "ticks": result["ticks"], "snapshot_bytes": snapshot_bytes,
-            "stages": {stage: summary[stage] for stage in STAGES if stage in summary}}
-
-
-def format_step_table(report: dict[str, Any]) -> str:
-    """The `bench_step` report as a table: one line for the episode, one per stage.
-
-    Args:
-        report: the report.
-
-    Returns:
-        The table's text.
-    """
-    lines = [
-        f"bench step: seed {report['seed']}, {report['area_m2']} m², {report['rooms']} rooms, "
-        f"{report['steps']} steps, episode {report['episode_s']:.2f} s "
-        f"({report['per_step_ms']:.0f} ms per step), {report['status']}",
-        f"snapshots: {report['snapshot_bytes'] / 1e6:.2f} MB for {report['ticks']} ticks",
-        f"{'stage':<10} {'count':>6} {'median ms':>10} {'p95 ms':>9} {'max ms':>9}",
-    ]
-    for stage, figures in report["stages"].items():
-        lines.append(f"{stage:<10} {figures['count']:>6} {figures['median_ms']:>10.2f} "
-                     f"{figures['p95_ms']:>9.2f} {figures['max_ms']:>9.2f}")
-    lines.append("tick counts every tick, including those that only poll a query in flight.")
-    return "\n".join(lines)
 
 
 def format_world_table(report: dict[str, Any]) -> str:

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import Commands, add_config_options, load_settings
+from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, load_settings
 
 
 def add_command(commands: Commands) -> None:
@@ -17,10 +17,12 @@ def add_command(commands: Commands) -> None:
     """
     bench = commands.add_parser("bench", help="measure speed")
     benches = bench.add_subparsers(dest="bench", required=True)
-    step = benches.add_parser("step", help="per-stage time of each step over one fixed episode")
+    step = benches.add_parser("step", help="per-stage time of each step over one fixed episode per home size, "
+                                           "and the speed targets")
     add_config_options(step)
     step.add_argument("--seed", type=int, default=0)
-    step.add_argument("--area", type=float, default=None, help="floor area of the home in m² (60..300)")
+    step.add_argument("--area", type=float, default=None,
+                      help="run only a home of this floor area in m² (60..300; default: 60 and 300)")
     step.add_argument("--json", action="store_true", help="print the figures as JSON")
     step.set_defaults(handler=_bench_step)
     arm = benches.add_parser("skills", help="IK and trajectory computation times of the arm")
@@ -109,8 +111,27 @@ def _tabletop_scenes(text: str) -> list[tuple[str, int]]:
 
 
 def _bench_step(args: argparse.Namespace) -> int:
-    from agent.app.bench import bench_step, dump, format_step_table
+    from agent.app.bench import dump
+    from agent.app.bench.step import AREAS, bench_step, format_step_report
+    from agent.app.runtime.run import RunError
+    from worlds.home import AREA_RANGE
 
-    report = bench_step(load_settings(args), args.seed, args.area)
-    print(dump(report) if args.json else format_step_table(report))
+    low, high = AREA_RANGE
+    if args.area is not None and not low <= args.area <= high:
+        print(f"homebot bench step: --area {args.area:g} is not in {low:g}..{high:g}", file=sys.stderr)
+        return 2
+    if args.seed < 0:
+        print(f"homebot bench step: --seed {args.seed} must not be negative", file=sys.stderr)
+        return 2
+    areas = AREAS if args.area is None else (args.area,)
+    try:
+        report = bench_step(load_settings(args), args.seed, areas,
+                            lambda line: print(line, file=sys.stderr, flush=True))
+    except RunError as error:
+        print(f"homebot bench step: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("homebot bench step: interrupted", file=sys.stderr)
+        return INTERRUPTED
+    print(dump(report) if args.json else format_step_report(report))
     return 0
