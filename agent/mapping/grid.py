@@ -107,15 +107,28 @@ class GridSpec:
         Returns:
             (rows, cols) slices and the mask over them; None when the disc misses the grid.
         """
-        centre = np.asarray(centre_xy, dtype=float)
-        low = np.maximum(self.to_cell(centre - radius_m), 0)
-        high = np.minimum(self.to_cell(centre + radius_m) + 1, self.shape)
+        return self.discs_window(np.asarray(centre_xy, dtype=float).reshape(1, 2), radius_m)
+
+    def discs_window(self, centres_xy: np.ndarray,
+                     radius_m: float) -> tuple[tuple[slice, slice], np.ndarray] | None:
+        """The union of discs of one radius (a swept path, say) over the window around them.
+
+        Args:
+            centres_xy: the discs' centres (N, 2) (world, m).
+            radius_m: their radius.
+
+        Returns:
+            (rows, cols) slices and the mask over them; None when the discs miss the grid.
+        """
+        centres_xy = np.asarray(centres_xy, dtype=float).reshape(-1, 2)
+        low = np.maximum(self.to_cell(centres_xy - radius_m).min(axis=0), 0)
+        high = np.minimum(self.to_cell(centres_xy + radius_m).max(axis=0) + 1, self.shape)
         if np.any(low >= high):
             return None
         rows, cols = np.mgrid[low[0]:high[0], low[1]:high[1]]
-        centres = self.to_world(np.stack([rows, cols], axis=-1))
-        inside = np.hypot(centres[..., 0] - centre[0], centres[..., 1] - centre[1]) <= radius_m
-        return (slice(low[0], high[0]), slice(low[1], high[1])), inside
+        cells = self.to_world(np.stack([rows, cols], axis=-1))[..., None, :]
+        inside = np.hypot(cells[..., 0] - centres_xy[:, 0], cells[..., 1] - centres_xy[:, 1]) <= radius_m
+        return (slice(low[0], high[0]), slice(low[1], high[1])), inside.any(axis=-1)
 
     def extent(self) -> tuple[float, float, float, float]:
         """(xmin, xmax, ymin, ymax), for plotting.

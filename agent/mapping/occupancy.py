@@ -165,15 +165,15 @@ class ExplorationMap:
         step = self.spec.resolution / 2
         for start, end in zip(path[:-1], path[1:]):
             samples = max(int(np.ceil(np.hypot(*(end - start)) / step)), 1)
-            for t in np.linspace(0.0, 1.0, samples + 1):
-                self._mark_disc(self.driven, tuple(start + t * (end - start)), self.config.driven_radius)
+            t = np.linspace(0.0, 1.0, samples + 1)[:, None]
+            self._mark_discs(self.driven, start + t * (end - start), self.config.driven_radius)
         if len(path) == 1:
-            self._mark_disc(self.driven, tuple(path[0]), self.config.driven_radius)
+            self._mark_discs(self.driven, path[:1], self.config.driven_radius)
         self.occupied &= ~self.driven | self.bumped
 
-    def _mark_disc(self, grid: np.ndarray, centre_xy: tuple[float, float], radius_m: float) -> None:
-        """Set the cells of ``grid`` within ``radius_m`` of a point."""
-        window = self.spec.disc_window(centre_xy, radius_m)
+    def _mark_discs(self, grid: np.ndarray, centres_xy: np.ndarray, radius_m: float) -> None:
+        """Set the cells of ``grid`` within ``radius_m`` of any of the points (N, 2)."""
+        window = self.spec.discs_window(centres_xy, radius_m)
         if window is not None:
             grid[window[0]] |= window[1]
 
@@ -184,7 +184,7 @@ class ExplorationMap:
             point_xy: where it touched (world, m).
         """
         self.revision += 1
-        self._mark_disc(self.bumped, point_xy, self.spec.resolution)
+        self._mark_discs(self.bumped, np.asarray(point_xy, dtype=float), self.spec.resolution)
         self.occupied |= self.bumped
 
     @property
