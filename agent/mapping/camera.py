@@ -63,11 +63,13 @@ def back_project(
     valid = depth > 0
     if mask is not None:
         valid &= mask
-    rows, cols = np.nonzero(valid)
-    z = depth[rows, cols].astype(float)
-    x = (cols + 0.5 - intrinsics.cx) * z / intrinsics.fx
-    y = (rows + 0.5 - intrinsics.cy) * z / intrinsics.fy
-    points = np.stack([x, y, z, np.ones_like(z)], axis=1)
+    height, width = depth.shape
+    z = depth[valid].astype(float)
+    points = np.empty((len(z), 4))
+    points[:, 0] = np.broadcast_to(np.arange(width) + 0.5 - intrinsics.cx, (height, width))[valid] * z / intrinsics.fx
+    points[:, 1] = np.broadcast_to((np.arange(height) + 0.5 - intrinsics.cy)[:, None], (height, width))[valid] * z / intrinsics.fy
+    points[:, 2] = z
+    points[:, 3] = 1.0
     return (points @ camera_to_world.T)[:, :3]
 
 
