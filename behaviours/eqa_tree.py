@@ -92,7 +92,7 @@ def build_eqa_tree(parts: EqaTreeParts) -> py_trees.behaviour.Behaviour:
     )
     rng = np.random.default_rng([parts.seed, 7])
     move_or_finish = py_trees.composites.Selector(
-        "Move or finish", memory=False, children=[MarkExplorationComplete(), Navigate(parts.link, parts.move_timeout_s)]
+        "Move or finish", memory=False, children=[MarkExplorationComplete(), Navigate(parts.link, parts.move_timeout_s, timer)]
     )
     where_to: py_trees.behaviour.Behaviour = SelectFrontier(parts.explore, parts.frontier_weights, rng, timer)
     if parts.act is not None:

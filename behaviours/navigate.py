@@ -17,6 +17,7 @@ from worlds.bus.codec import Message
 from worlds.bus.link import WorldLink
 from behaviours.world_command import WorldCommand
 from agent.pose import Pose2D
+from agent.timing import StageTimer
 
 
 class Navigate(WorldCommand):
@@ -25,11 +26,14 @@ class Navigate(WorldCommand):
     Args:
         link: the world link.
         timeout_s: how long a move may take.
+        timer: times each move's round trip (``drive``: the world driving the base, and the wire), if given.
         name: the node's name.
     """
 
-    def __init__(self, link: WorldLink, timeout_s: float = 30.0, name: str = "Navigate") -> None:
+    def __init__(self, link: WorldLink, timeout_s: float = 30.0, timer: StageTimer | None = None,
+                 name: str = "Navigate") -> None:
         super().__init__(name, link, "move_base", timeout_s)
+        self.timer = timer
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(bb.PLAN, access=Access.READ)
         self.blackboard.register_key(bb.TRAJECTORY, access=Access.WRITE)
@@ -43,6 +47,8 @@ class Navigate(WorldCommand):
         return {"path": plan.path_xy.round(3).tolist(), "yaw": round(float(plan.yaw), 4)}
 
     def on_reply(self, message: Message) -> Status:
+        if self.timer is not None and self._pending is not None:
+            self.timer.record("drive", self._pending.elapsed_s * 1000.0)
         pose = message.meta.get("base_pose")
         if not (isinstance(pose, list) and len(pose) == 3):
             self.feedback_message = "move_base reply: base_pose must be [x, y, yaw]"

@@ -13,26 +13,27 @@ from worlds.bus.session import free_tcp_endpoint
 
 
 def _timer(steps: int, tsdf: list[float]) -> StageTimer:
-    """Each step: render 20 ms, transport 5, planning 10, VLM 8 and 2; its map stage from ``tsdf``."""
+    """Each step: render 20 ms, transport 5, planning 10, VLM 8 and 2, drive 4; its map stage from ``tsdf``."""
     timer = StageTimer()
     for step in range(steps):
         for stage, ms in (("render", 20.0), ("transport", 5.0), ("tsdf", tsdf[step]), ("vlm", 8.0),
-                          ("vlm_directions", 2.0), ("planning", 10.0), ("tick", 1.0)):
+                          ("vlm_directions", 2.0), ("planning", 10.0), ("drive", 4.0), ("tick", 1.0)):
             timer.record(stage, ms)
     return timer
 
 
-def test_the_overhead_is_the_wall_time_less_render_and_vlm_split_into_its_stages() -> None:
+def test_the_overhead_is_the_wall_time_less_render_drive_and_vlm_split_into_its_stages() -> None:
     tsdf = [30.0] * 50
     result = {"steps": 50, "seconds": 50 * 0.1, "status": "answered", "ticks": 500}  # 100 ms per step
     report = episode_report(_timer(50, tsdf), result, [])
     overhead = report["overhead"]
     assert overhead["render_per_step_ms"] == pytest.approx(20.0)
     assert overhead["vlm_per_step_ms"] == pytest.approx(10.0)  # both VLM stages
-    assert overhead["per_step_ms"] == pytest.approx(70.0)  # 100 - 20 - 10
+    assert overhead["drive_per_step_ms"] == pytest.approx(4.0)
+    assert overhead["per_step_ms"] == pytest.approx(66.0)  # 100 - 20 - 10 - 4
     assert overhead["parts_per_step_ms"] == pytest.approx({"transport": 5.0, "tsdf": 30.0, "planning": 10.0,
-                                                           "the rest": 25.0})
-    assert overhead["over_render"] == pytest.approx(3.5)
+                                                           "the rest": 21.0})
+    assert overhead["over_render"] == pytest.approx(3.3)
     assert report["per_step_ms"] == pytest.approx(100.0)
     assert report["startup_s"] is None
     assert report["memory"]["end_over_step"] is None  # no samples

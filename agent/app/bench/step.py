@@ -5,10 +5,10 @@ default the seed's episode runs in a home of 60 m² and one of 300 m², and the 
 home, each stage's median and what the agent spends besides rendering and the VLM; then the
 targets, each with its goal and whether it is met:
 
-- agent overhead ÷ render: the episode's wall time less the time spent rendering and asking the
-  VLM, over the time spent rendering (totals over the episode). What remains is transport,
-  fusing frames (tsdf), planning, and the rest: the rest of each tick's work and what passes
-  between ticks (sleeps, snapshots, the world driving the base).
+- agent overhead ÷ render: the episode's wall time less the time the world spends rendering and
+  driving the base and the time spent asking the VLM, over the time spent rendering (totals over
+  the episode). What remains is transport, fusing frames (tsdf), planning, and the rest: the rest
+  of each tick's work and what passes between ticks (waits, snapshots).
 - per-step total and render time, 300 m² ÷ 60 m²;
 - the map stage's median at steps 35–44 over steps 3–7 (the largest home's episode);
 - start-up to the first observation (``startup_s`` of the episode's result, when it has one);
@@ -30,7 +30,7 @@ from agent.timing import StageTimer
 from worlds.home import generate_home
 from worlds.spec import dump_spec
 
-STAGES = ("render", "transport", "tsdf", "planning", "vlm", "vlm_directions", "tick")
+STAGES = ("render", "transport", "tsdf", "planning", "drive", "vlm", "vlm_directions", "tick")
 #: The home sizes compared by default (m²): the ratios are the second over the first.
 AREAS = (60.0, 300.0)
 #: The map stage's early and late steps (1-based, inclusive).
@@ -38,8 +38,8 @@ EARLY_STEPS, LATE_STEPS = (3, 7), (35, 44)
 #: The step whose memory the end's is compared with.
 MEMORY_STEP = 10
 GOALS = {"overhead": 0.25, "per_step": 1.5, "render": 1.3, "map_late": 1.2, "startup_s": 3.0, "memory": 1.10}
-OVERHEAD_COUNTS = ("the episode's wall time less its render and VLM time: transport, tsdf, planning, and the "
-                   "rest (the rest of each tick's work, sleeps between ticks, snapshots, the world driving the base)")
+OVERHEAD_COUNTS = ("the episode's wall time less the world's rendering and driving and the VLM's time: transport, "
+                   "tsdf, planning, and the rest (the rest of each tick's work, waits between ticks, snapshots)")
 
 Progress = Callable[[str], None]
 
@@ -137,7 +137,8 @@ def episode_report(timer: StageTimer, result: dict[str, Any], rss_mb: Sequence[f
     total = {stage: sum(values) for stage, values in timer.samples.items()}
     render = total.get("render", 0.0)
     vlm = sum(ms for stage, ms in total.items() if stage.startswith("vlm"))
-    overhead = 1000.0 * result["seconds"] - render - vlm
+    drive = total.get("drive", 0.0)
+    overhead = 1000.0 * result["seconds"] - render - vlm - drive
     parts = {stage: total.get(stage, 0.0) for stage in ("transport", "tsdf", "planning")}
     parts["the rest"] = overhead - sum(parts.values())
     summary = timer.summary()
@@ -150,7 +151,8 @@ def episode_report(timer: StageTimer, result: dict[str, Any], rss_mb: Sequence[f
         "startup_s": result.get("startup_s"),
         "stages": {stage: summary[stage] for stage in STAGES if stage in summary},
         "overhead": {"per_step_ms": overhead / steps, "render_per_step_ms": render / steps,
-                     "vlm_per_step_ms": vlm / steps, "parts_per_step_ms": {k: v / steps for k, v in parts.items()},
+                     "vlm_per_step_ms": vlm / steps, "drive_per_step_ms": drive / steps,
+                     "parts_per_step_ms": {k: v / steps for k, v in parts.items()},
                      "over_render": overhead / render if render else None},
         "map_stage": {"early_ms": early, "late_ms": late,
                       "late_over_early": late / early if early and late is not None else None},
@@ -248,7 +250,8 @@ def _episode_lines(episode: dict[str, Any]) -> list[str]:
         *(f"  {stage:<15}{f['count']:>6}{f['median_ms']:>11.2f}{f['p95_ms']:>9.2f}{f['max_ms']:>9.2f}"
           for stage, f in episode["stages"].items()),
         f"  agent overhead {overhead['per_step_ms']:.1f} ms per step = {parts}",
-        f"  render {overhead['render_per_step_ms']:.1f}, VLM {overhead['vlm_per_step_ms']:.1f} ms per step; "
+        f"  render {overhead['render_per_step_ms']:.1f}, drive {overhead['drive_per_step_ms']:.1f}, "
+        f"VLM {overhead['vlm_per_step_ms']:.1f} ms per step; "
         f"overhead ÷ render {_figure(overhead['over_render'])}",
         f"  map stage median {_figure(map_stage['early_ms'], ' ms')} at steps {EARLY_STEPS[0]}–{EARLY_STEPS[1]}, "
         f"{_figure(map_stage['late_ms'], ' ms')} at {LATE_STEPS[0]}–{LATE_STEPS[1]}",
