@@ -173,8 +173,8 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     root = build_eqa_tree(parts)
     plug_into(root, plugged)
     control = EpisodeControl(behaviour.name for behaviour in root.iterate())
-    runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds,
-                           config.episode.tick_period_s, timer, control)
+    runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds, config.episode.tick_period_s,
+                           timer, control, config.episode.max_wait_s)
     control_server = ControlServer(session, keys, control)
     if recorder is not None:
         runner.tree.add_post_tick_handler(recorder.after_tick)
