@@ -1,13 +1,16 @@
 """A behaviour that asks the VLM in a worker thread and stays RUNNING until the answer is in.
 
 A remote model takes hundreds of milliseconds; the tick must not wait for it. `initialise` hands
-the question to a one-thread executor (made in `setup`, shut down in `shutdown`), `update` polls the future, fails with the reason on a
-timeout or an error, and passes the answer to `use` when it arrives.
+the question to a one-thread executor (made in `setup`, shut down in `shutdown`), `update` polls
+the future, fails with the reason on a timeout or an error, and passes the answer to `use` when it
+arrives. The answer calls the ``wake`` the tree handed `setup`, if any, so the tree ticks again
+as soon as it is in.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
@@ -38,6 +41,7 @@ class AsyncVLMQuery(py_trees.behaviour.Behaviour):
         self._executor: ThreadPoolExecutor | None = None
         self._future: Future | None = None
         self._started = 0.0
+        self._wake: Callable[[], None] | None = None
 
     def inputs(self) -> tuple[Any, ...]:
         """Read what the question needs from the blackboard (in the tick thread).
@@ -69,18 +73,22 @@ class AsyncVLMQuery(py_trees.behaviour.Behaviour):
         """
         raise NotImplementedError
 
-    def setup(self, **kwargs: object) -> None:
-        """Make the executor the VLM is asked in.
+    def setup(self, **kwargs: Any) -> None:
+        """Make the executor the VLM is asked in; take the tree's ``wake``, if it hands one.
 
         Args:
-            **kwargs: py_trees' setup arguments, unused.
+            **kwargs: py_trees' setup arguments; ``wake`` is called once an answer is in.
         """
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vlm")
+        self._wake = kwargs.get("wake")
 
     def initialise(self) -> None:
         self._started = time.perf_counter()
         assert self._executor is not None, f"{self.name}.setup() makes the executor the VLM is asked in"
         self._future = self._executor.submit(self.ask, *self.inputs())
+        if self._wake is not None:
+            wake = self._wake
+            self._future.add_done_callback(lambda _: wake())
 
     def update(self) -> Status:
         elapsed = time.perf_counter() - self._started

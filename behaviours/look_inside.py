@@ -40,8 +40,10 @@ import logging
 import math
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import py_trees
@@ -141,14 +143,16 @@ class LookInside(py_trees.behaviour.Behaviour):
         self._future: Future[_Outcome] | None = None
         self._stop = threading.Event()  # the running act's: set, it opens no further part
         self._why_not = ""
+        self._wake: Callable[[], None] | None = None
 
-    def setup(self, **kwargs: object) -> None:
-        """Make the executor the arm works in.
+    def setup(self, **kwargs: Any) -> None:
+        """Make the executor the arm works in; take the tree's ``wake``, if it hands one.
 
         Args:
-            **kwargs: py_trees' setup arguments, unused.
+            **kwargs: py_trees' setup arguments; ``wake`` is called once the act is done.
         """
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="look-inside")
+        self._wake = kwargs.get("wake")
 
     def initialise(self) -> None:
         self._future, self._why_not = None, ""
@@ -171,6 +175,9 @@ class LookInside(py_trees.behaviour.Behaviour):
         self._stop = threading.Event()
         assert self._pool is not None, "LookInside.setup() makes the executor the arm works in"
         self._future = self._pool.submit(self._open_and_look, state, kind, part, routes, self._stop)
+        if self._wake is not None:
+            wake = self._wake
+            self._future.add_done_callback(lambda _: wake())
 
     def update(self) -> Status:
         if self._future is None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import py_trees
@@ -16,8 +17,9 @@ class WorldCommand(py_trees.behaviour.Behaviour):
     """Base for leaves that talk to the world.
 
     The command is sent in `initialise`; `update` polls for the reply without blocking, so the tree
-    keeps ticking (and publishing snapshots) while the world works. A timeout, an error reply or a
-    world that has gone turns into FAILURE with the reason as the feedback message.
+    keeps ticking (and publishing snapshots) while the world works. The reply calls the ``wake``
+    the tree handed `setup`, if any, so the tree ticks again as soon as it is in. A timeout, an
+    error reply or a world that has gone turns into FAILURE with the reason as the feedback message.
 
     Args:
         name: the node's name.
@@ -33,6 +35,7 @@ class WorldCommand(py_trees.behaviour.Behaviour):
         self.timeout_s = timeout_s
         self._pending: PendingReply | None = None
         self._request_error: str | None = None
+        self._wake: Callable[[], None] | None = None
 
     def request(self) -> dict[str, Any]:
         """The command's metadata; raise ValueError if it cannot be formed.
@@ -56,10 +59,18 @@ class WorldCommand(py_trees.behaviour.Behaviour):
         """
         raise NotImplementedError
 
+    def setup(self, **kwargs: Any) -> None:
+        """Take the tree's ``wake``, if it hands one: the world's reply then wakes the tree.
+
+        Args:
+            **kwargs: py_trees' setup arguments; ``wake`` is called once a reply is in.
+        """
+        self._wake = kwargs.get("wake")
+
     def initialise(self) -> None:
         self._pending, self._request_error = None, None
         try:
-            self._pending = self.link.request(self.verb, self.request(), self.timeout_s)
+            self._pending = self.link.request(self.verb, self.request(), self.timeout_s, on_reply=self._wake)
         except (ValueError, QueryFailed) as error:
             self._request_error = f"{self.verb}: {error}"
 

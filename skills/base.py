@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
@@ -109,6 +110,7 @@ class ArmSkill(PortedSkill):
         """
         super().__init__(context, name, bindings)
         self.timeout_s = timeout_s
+        self._wake: Callable[[], None] | None = None
         self._reset()
 
     # -- for subclasses ------------------------------------------------------------------------
@@ -148,14 +150,22 @@ class ArmSkill(PortedSkill):
         self._failure = ""
         self._request_error = ""
 
+    def setup(self, **kwargs: Any) -> None:
+        """Take the tree's ``wake``, if it hands one: each reply of the world then wakes the tree.
+
+        Args:
+            **kwargs: py_trees' setup arguments; ``wake`` is called once a reply is in.
+        """
+        self._wake = kwargs.get("wake")
+
     def initialise(self) -> None:
         super().initialise()
         self._reset()
         try:
             if self.context.planner is None:
-                self._pending = self.link.describe(self.timeout_s)
+                self._pending = self.link.describe(self.timeout_s, self._wake)
             else:
-                self._phase, self._pending = "state", self.link.request("arm_state", {}, self.timeout_s)
+                self._phase, self._pending = "state", self._ask("arm_state", {})
         except QueryFailed as error:
             self._pending = None
             self._request_error = str(error)
@@ -196,7 +206,7 @@ class ArmSkill(PortedSkill):
         except (ValueError, KeyError) as error:
             return self._fail(f"robot description: {error}")
         self._phase = "state"
-        return self._send(lambda: self.link.request("arm_state", {}, self.timeout_s))
+        return self._send(lambda: self._ask("arm_state", {}))
 
     def _planned(self, message: Message) -> Status:
         planner = self.context.planner
@@ -230,7 +240,7 @@ class ArmSkill(PortedSkill):
                 hold = planner.hold(self._last["q"])
                 return self._send(lambda: self._send_move(hold))
             self._holding_after_error = False
-            return self._send(lambda: self.link.request("gripper", {"action": step.action}, self.timeout_s))
+            return self._send(lambda: self._ask("gripper", {"action": step.action}))
         if step.samples is not None and np.abs(step.samples[0] - self._last["q"]).max() > RETIME_RAD:
             try:
                 step = planner.retime(step, self._last["q"])
@@ -242,8 +252,13 @@ class ArmSkill(PortedSkill):
     def _send_move(self, step: Step) -> PendingReply:
         assert step.samples is not None
         timeout = step.duration_s + COMMAND_SLACK_S
-        return self.link.request("arm_trajectory", {"dt": step.dt, "stop_on_contact": step.stop_on_contact},
-                                 timeout, arrays={"samples": np.ascontiguousarray(step.samples, dtype=np.float64)})
+        return self._ask("arm_trajectory", {"dt": step.dt, "stop_on_contact": step.stop_on_contact}, timeout,
+                         arrays={"samples": np.ascontiguousarray(step.samples, dtype=np.float64)})
+
+    def _ask(self, verb: str, meta: dict[str, Any], timeout_s: float | None = None,
+             arrays: dict[str, np.ndarray] | None = None) -> PendingReply:
+        """Send ``verb`` to the world; its reply wakes the tree (`setup`'s ``wake``), if any."""
+        return self.link.request(verb, meta, timeout_s or self.timeout_s, arrays, self._wake)
 
     def _send(self, request: Any) -> Status:
         try:
@@ -316,7 +331,7 @@ class ArmSkill(PortedSkill):
             held = last.get("held")
             self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {thing_name(held)})"
             try:
-                self._pending = self.link.request("gripper", {"action": "open"}, self.timeout_s)
+                self._pending = self._ask("gripper", {"action": "open"})
             except QueryFailed as error:
                 return self._failed(f"{self._failure}; but letting go failed: {error}")
             self.feedback_message = self._doing()

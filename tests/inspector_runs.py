@@ -61,7 +61,7 @@ def record_run(folder: Path, ticks: int = 6) -> EpisodeOutcome:
     py_trees.blackboard.Blackboard.clear()
     log = SnapshotLog(folder / "snapshots.jsonl")
     try:
-        outcome = EpisodeRunner(tree(ticks), "recorded-run", [log], 10.0, tick_period_s=0.001).run()
+        outcome = EpisodeRunner(tree(ticks), "recorded-run", [log], 10.0, max_wait_s=0.001).run()
     finally:
         log.close()
     (folder / "result.json").write_text(json.dumps({"status": outcome.status, "reason": outcome.reason}))
@@ -85,7 +85,7 @@ def live_run(session: Any, key: str, ticks: int, period_s: float) -> threading.T
     def run() -> None:
         try:
             EpisodeRunner(tree(ticks), "live-run", [lambda data: publisher.put(json.dumps(data))], 60.0,
-                          tick_period_s=period_s).run()
+                          tick_period_s=period_s, max_wait_s=period_s).run()
         finally:
             publisher.undeclare()
 

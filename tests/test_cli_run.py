@@ -76,3 +76,5 @@ def test_run_runs_the_suite_scenario_named_in_its_home(hidden_suite: Path, tmp_p
     assert result["seed"] == entry["seed"]
     assert (result["question"], result["choices"]) == (entry["scenario"]["question"], entry["scenario"]["choices"])
     assert result["evaluation"]["target"]["kind"] == "storage"
+    assert result["startup_s"] > 0  # from the process's start to the first observation on the board
+    assert f"first observation {result['startup_s']:.1f} s after `homebot run` started" in done.stdout

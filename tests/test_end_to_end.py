@@ -119,7 +119,8 @@ def test_run_and_watch_from_the_command_line(tmp_path: Path) -> None:
     agent_endpoint = free_tcp_endpoint()
     run = subprocess.Popen(
         [sys.executable, "-m", "agent.app.cli", "run", "--seed", "1", "--listen", agent_endpoint,
-         "--set", "episode.budget=8", "--out", str(tmp_path)],
+         "--set", "episode.budget=8", "--set", "episode.tick_period_s=0.2",  # paced: still running when watched
+         "--out", str(tmp_path)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:

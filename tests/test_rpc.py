@@ -306,3 +306,19 @@ def test_listening_twice_on_one_endpoint_is_an_endpoint_error() -> None:
     with open_session(listen=[endpoint]):
         with pytest.raises(EndpointError, match=r"cannot open a Zenoh session"):
             open_session(listen=[endpoint])
+
+
+def test_on_reply_is_called_once_the_reply_is_in_and_when_none_will_come(bus: Bus, serve: Any) -> None:
+    """The hook that wakes a waiting tree: called when the reply arrives, and when the query ends
+    without one (nobody serves the key), each time with something for `poll` to give."""
+    key = f"{bus.namespace}/world/cmd/echo"
+    serve({key: echo})
+    arrived = threading.Event()
+    pending = PendingReply(bus.client_session, key, {"n": 2}, timeout_s=5, on_reply=arrived.set)
+    assert arrived.wait(5.0)
+    assert pending.poll().meta["echo"] == {"n": 2}
+    ended = threading.Event()
+    unserved = PendingReply(bus.client_session, f"{bus.namespace}/world/cmd/absent", timeout_s=20, on_reply=ended.set)
+    assert ended.wait(10.0)
+    with pytest.raises(QueryFailed, match=r"nobody serves this key"):
+        unserved.poll()

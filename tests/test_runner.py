@@ -83,7 +83,7 @@ def sequence(*children: py_trees.behaviour.Behaviour) -> py_trees.composites.Seq
 
 
 def run(root: py_trees.behaviour.Behaviour, sinks: list | None = None, max_seconds: float = 10.0) -> EpisodeOutcome:
-    return EpisodeRunner(root, "run-test", sinks if sinks is not None else [], max_seconds, tick_period_s=0.001).run()
+    return EpisodeRunner(root, "run-test", sinks if sinks is not None else [], max_seconds, max_wait_s=0.001).run()
 
 
 def test_raising_behaviour_fails_the_episode_with_its_name() -> None:

@@ -45,7 +45,7 @@ TABLETOP = {("recursive", 0): "5b8264ab7c8f062c", ("drawer-door", 1): "b9a05ee11
 
 _DECIDED = ("status", "reason", "failed_behaviour", "answer", "answer_detail", "steps", "step_scores",
             "prediction_set", "acts", "evaluation")
-_TIMINGS = {"seconds", "wall_s", "planning_ms", "execution_s", "skill_seconds", "ticks"}
+_TIMINGS = {"seconds", "wall_s", "planning_ms", "execution_s", "skill_seconds", "ticks", "startup_s"}
 
 
 def _without_timings(value: Any) -> Any:

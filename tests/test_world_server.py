@@ -11,6 +11,8 @@ import sys
 import threading
 import uuid
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -195,15 +197,30 @@ def test_description_gives_robot_camera_and_urdf(world: World) -> None:
     assert {"base_link", "head_camera_link", "head_camera_optical_frame"} <= links
 
 
-def test_liveliness_token_comes_and_goes_with_the_server() -> None:
+@contextmanager
+def _world_thread(seed: int) -> Iterator[tuple[zenoh.Session, Keys, LivenessWatch, threading.Event, threading.Thread]]:
+    """A world reset to ``seed`` at start, to be served by the thread given (not yet started) until
+    the event is set; a client session connected to it, and a watch on its token."""
     endpoint = free_tcp_endpoint()
     keys = Keys(f"homebot/test-{uuid.uuid4().hex[:8]}")
     server_session, client = open_session(listen=[endpoint]), open_session(connect=[endpoint])
     watch = LivenessWatch(client, keys.world_alive)
     stop = threading.Event()
     server = WorldServer(server_session, keys.namespace, CameraConfig(width=64, height=48))
-    thread = threading.Thread(target=server.serve, args=(stop, 2), daemon=True)
+    thread = threading.Thread(target=server.serve, args=(stop, seed), daemon=True)
     try:
+        yield client, keys, watch, stop, thread
+    finally:
+        stop.set()
+        if thread.ident is not None:
+            thread.join(10.0)
+        watch.close()
+        client.close()
+        server_session.close()
+
+
+def test_liveliness_token_comes_and_goes_with_the_server() -> None:
+    with _world_thread(2) as (client, keys, watch, stop, thread):
         assert not watch.alive
         thread.start()
         assert watch.wait_alive(10.0)
@@ -217,11 +234,27 @@ def test_liveliness_token_comes_and_goes_with_the_server() -> None:
                 break
             threading.Event().wait(0.01)
         assert watch.gone() and "liveliness token" in watch.gone()
-    finally:
-        stop.set()
-        watch.close()
-        client.close()
-        server_session.close()
+
+
+def test_a_world_reset_at_start_answers_the_first_reset_to_it_without_building_again(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """The home built at start (``serve(stop, seed)``) answers a first reset to just that seed; once
+    another command came, a reset builds the home again, and replies as the first did."""
+    def builds() -> int:
+        return sum(record.name == "worlds.sim" and record.getMessage().startswith("home 2:")
+                   for record in caplog.records)
+
+    caplog.set_level("INFO", logger="worlds.sim")
+    with _world_thread(2) as (client, keys, watch, _, thread):
+        thread.start()
+        assert watch.wait_alive(30.0)
+        assert builds() == 1
+        first = call(client, keys.world_cmd("reset"), {"seed": 2}, timeout_s=30.0)
+        assert builds() == 1
+        call(client, keys.world_cmd("observe"), {}, timeout_s=10.0)
+        again = call(client, keys.world_cmd("reset"), {"seed": 2}, timeout_s=30.0)
+        assert builds() == 2
+        assert again.meta == first.meta
 
 
 def test_standalone_process_serves_and_stops_on_sigterm() -> None:

@@ -32,7 +32,7 @@ import zenoh
 
 from worlds.bus.codec import Message
 from worlds.bus.keys import Keys
-from worlds.bus.rpc import Arrays, CommandServer, RequestError
+from worlds.bus.rpc import Arrays, CommandServer, Handler, RequestError
 from worlds.bus.session import EndpointError, open_session
 from worlds import commands
 from worlds.evaluation import EpisodeRecord
@@ -69,9 +69,15 @@ class WorldServer:
         self.ready = threading.Event()
         self._world: World | None = None
         self._record: EpisodeRecord | None = None  # the evaluator's, for the home episode under way
+        # the reset done at start and its reply, until another command comes
+        self._prepared: tuple[dict[str, Any], tuple[dict[str, Any], Arrays]] | None = None
 
     def serve(self, stop: threading.Event, seed: int | None = None) -> None:
         """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set.
+
+        A world reset to ``seed`` at start answers a first command that asks for just that reset,
+        ``{"seed": seed}``, with the home it has built, without building it again: an agent that
+        starts its world with the seed it will ask for has the home built while it gets ready.
 
         Args:
             stop: set to stop serving.
@@ -82,15 +88,16 @@ class WorldServer:
         token = None
         try:
             if seed is not None:
-                self._world.reset(seed)
+                self._prepared = ({"seed": seed}, self._reset(Message({"seed": seed})))
             server.add(self.keys.world_cmd("reset"), self._reset)
-            server.add(self.keys.world_cmd("observe"), self._observe)
-            server.add(self.keys.world_cmd("move_base"), self._move_base)
-            server.add(self.keys.world_cmd("arm_state"), self._arm_state)
-            server.add(self.keys.world_cmd("arm_trajectory"), self._arm_trajectory)
-            server.add(self.keys.world_cmd("gripper"), self._gripper)
-            server.add(self.keys.world_cmd("episode_report"), self._episode_report)
-            server.add(self.keys.world_description, self._description)
+            for key, handler in ((self.keys.world_cmd("observe"), self._observe),
+                                 (self.keys.world_cmd("move_base"), self._move_base),
+                                 (self.keys.world_cmd("arm_state"), self._arm_state),
+                                 (self.keys.world_cmd("arm_trajectory"), self._arm_trajectory),
+                                 (self.keys.world_cmd("gripper"), self._gripper),
+                                 (self.keys.world_cmd("episode_report"), self._episode_report),
+                                 (self.keys.world_description, self._description)):
+                server.add(key, self._after_prepared(handler))
             token = self.session.liveliness().declare_token(self.keys.world_alive)
             self.ready.set()
             log.info("world serving under %s", self.keys.namespace)
@@ -118,7 +125,17 @@ class WorldServer:
             raise RequestError(f"{verb}: no home yet; send reset first")
         return self._world
 
+    def _after_prepared(self, handler: Handler) -> Handler:
+        """``handler``, after which the home built at start no longer answers a reset."""
+        def handle(request: Message) -> tuple[dict[str, Any], Arrays]:
+            self._prepared = None
+            return handler(request)
+        return handle
+
     def _reset(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        prepared, self._prepared = self._prepared, None
+        if prepared is not None and prepared[0] == request.meta:
+            return prepared[1]
         wanted = commands.parse_reset(request.meta)
         assert self._world is not None
         if wanted.tabletop is not None:

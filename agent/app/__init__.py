@@ -2,3 +2,7 @@
 
 It knows every layer below it; nothing imports it.
 """
+
+from agent.app.deferred_plotly import defer
+
+defer()  # before anything here imports open3d (the map, through the settings)

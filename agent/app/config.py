@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import tomllib
 import typing
 from dataclasses import dataclass, field
@@ -52,12 +53,22 @@ class BusSettings:
 
 @dataclass(frozen=True)
 class EpisodeSettings:
-    """An episode's limits: its step budget, wall time, tick period, and how long one VLM call may take."""
+    """An episode's limits: its step budget, wall time, how its ticks are paced, and how long one VLM
+    call may take. A tree that waits (on the world, on the VLM) ticks again the moment the reply is
+    in, or after ``max_wait_s`` if none comes; ``tick_period_s`` (0: none) is the least time between
+    ticks, to slow an episode down on purpose."""
 
     budget: int = 0  # 0: the scenario's own budget, int(3·sqrt(area))
     max_seconds: float = 900.0
-    tick_period_s: float = 0.002
+    tick_period_s: float = 0.0
+    max_wait_s: float = 0.05
     vlm_timeout_s: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.max_wait_s) and self.max_wait_s > 0):
+            raise ValueError(f"episode.max_wait_s: {self.max_wait_s!r} must be a number above 0")
+        if not (math.isfinite(self.tick_period_s) and self.tick_period_s >= 0):
+            raise ValueError(f"episode.tick_period_s: {self.tick_period_s!r} must be a number, 0 or above")
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import zenoh
@@ -28,7 +29,7 @@ class WorldLink:
         self.liveness = LivenessWatch(session, keys.world_alive)
 
     def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
-                arrays: Arrays | None = None) -> PendingReply:
+                arrays: Arrays | None = None, on_reply: Callable[[], None] | None = None) -> PendingReply:
         """Send the command ``verb`` (with ``arrays``, e.g. an arm trajectory's samples); poll the reply.
 
         Args:
@@ -36,24 +37,26 @@ class WorldLink:
             meta: its metadata.
             timeout_s: how long the reply may take (the link's default when None).
             arrays: its arrays.
+            on_reply: called (from Zenoh's thread) once there is something to poll.
 
         Returns:
             The pending reply.
         """
         return PendingReply(self.session, self.keys.world_cmd(verb), meta, arrays,
-                            timeout_s or self.timeout_s, self.liveness.gone)
+                            timeout_s or self.timeout_s, self.liveness.gone, on_reply=on_reply)
 
-    def describe(self, timeout_s: float | None = None) -> PendingReply:
+    def describe(self, timeout_s: float | None = None, on_reply: Callable[[], None] | None = None) -> PendingReply:
         """Ask for the robot's description (URDF, cameras, arm joints and limits).
 
         Args:
             timeout_s: how long the reply may take (the link's default when None).
+            on_reply: called (from Zenoh's thread) once there is something to poll.
 
         Returns:
             The pending reply.
         """
         return PendingReply(self.session, self.keys.world_description, {}, None,
-                            timeout_s or self.timeout_s, self.liveness.gone)
+                            timeout_s or self.timeout_s, self.liveness.gone, on_reply=on_reply)
 
     def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
              arrays: Arrays | None = None) -> Message:

@@ -19,21 +19,22 @@ class LivenessWatch:
     def __init__(self, session: zenoh.Session, key: str) -> None:
         self.key = key
         self._lock = threading.Lock()
-        self._alive = False
+        self._alive = threading.Event()  # set while the token is there
         self._lost_at: float | None = None
         self._subscriber = session.liveliness().declare_subscriber(key, self._on_sample, history=True)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         with self._lock:
             if sample.kind == zenoh.SampleKind.PUT:
-                self._alive, self._lost_at = True, None
+                self._lost_at = None
+                self._alive.set()
             else:
-                self._alive, self._lost_at = False, time.monotonic()
+                self._lost_at = time.monotonic()
+                self._alive.clear()
 
     @property
     def alive(self) -> bool:
-        with self._lock:
-            return self._alive
+        return self._alive.is_set()
 
     def gone(self) -> str | None:
         """Why the world is gone, once its liveliness token has been dropped; None while it is there.
@@ -47,7 +48,7 @@ class LivenessWatch:
         return f"the world process is gone (its liveliness token {self.key} was dropped)"
 
     def wait_alive(self, timeout_s: float) -> bool:
-        """Wait until the token is present, at most ``timeout_s``.
+        """Wait until the token is present, at most ``timeout_s``; return as soon as it comes.
 
         Args:
             timeout_s: how long to wait.
@@ -55,12 +56,7 @@ class LivenessWatch:
         Returns:
             Whether the token is present.
         """
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if self.alive:
-                return True
-            time.sleep(0.01)
-        return self.alive
+        return self._alive.wait(timeout_s)
 
     def close(self) -> None:
         self._subscriber.undeclare()

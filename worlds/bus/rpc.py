@@ -3,12 +3,14 @@
 A reply's header always has ``ok``; when it is false, ``error`` says what was wrong with the
 request, so a client in any language can report it. The client side never blocks the caller:
 `PendingReply.poll` returns at once, which is what a py_trees behaviour needs to stay RUNNING while
-the world works. Every query has a deadline.
+the world works, and its ``on_reply`` tells whoever waits meanwhile (the tree between ticks) the
+moment there is something to poll. Every query has a deadline.
 """
 
 from __future__ import annotations
 
 import logging
+import queue
 import threading
 import time
 from collections.abc import Callable
@@ -37,7 +39,8 @@ class CommandServer:
     """Serves handlers on queryables, one request at a time, from the thread that calls `serve`.
 
     Handlers run in the serving thread rather than Zenoh's callback threads, so a simulator that is
-    not thread-safe (PyBullet) is only ever touched from one thread.
+    not thread-safe (PyBullet) is only ever touched from one thread: Zenoh's callbacks only queue
+    the queries, in the order they came, and the serving thread waits on that queue.
 
     Args:
         session: the bus session.
@@ -47,7 +50,8 @@ class CommandServer:
     def __init__(self, session: zenoh.Session, limits: Limits = DEFAULT_LIMITS) -> None:
         self._session = session
         self._limits = limits
-        self._queryables: list[tuple[Any, Handler]] = []
+        self._queryables: list[Any] = []
+        self._waiting: queue.SimpleQueue[tuple[zenoh.Query, Handler]] = queue.SimpleQueue()
 
     def add(self, key: str, handler: Handler) -> None:
         """Answer queries on ``key`` with ``handler``.
@@ -56,35 +60,25 @@ class CommandServer:
             key: the key expression.
             handler: makes the reply from the query's message.
         """
-        self._queryables.append((self._session.declare_queryable(key), handler))
+        self._queryables.append(self._session.declare_queryable(
+            key, zenoh.handlers.Callback(lambda query: self._waiting.put((query, handler)))))
 
-    def serve(self, stop: threading.Event, idle_sleep_s: float = 0.001) -> None:
-        """Answer queries until ``stop`` is set.
+    def serve(self, stop: threading.Event, check_s: float = 0.05) -> None:
+        """Answer queries as they come until ``stop`` is set.
 
         Args:
             stop: set to stop serving.
-            idle_sleep_s: how long to sleep when no query waits.
+            check_s: the longest it waits for a query before looking at ``stop`` again.
         """
         while not stop.is_set():
-            if not self.serve_pending():
-                time.sleep(idle_sleep_s)
-
-    def serve_pending(self) -> bool:
-        """Answer every query waiting now; return whether there was any.
-
-        Returns:
-            Whether any query was answered.
-        """
-        served = False
-        for queryable, handler in self._queryables:
-            query = queryable.try_recv()
-            if query is not None:
-                self._answer(query, handler)
-                served = True
-        return served
+            try:
+                query, handler = self._waiting.get(timeout=check_s)
+            except queue.Empty:
+                continue
+            self._answer(query, handler)
 
     def close(self) -> None:
-        for queryable, _ in self._queryables:
+        for queryable in self._queryables:
             queryable.undeclare()
         self._queryables.clear()
 
@@ -107,8 +101,11 @@ class CommandServer:
 class PendingReply:
     """A query in flight. `poll` returns None until the reply arrives, then the reply's message.
 
-    ``gone`` is asked on every poll; when it returns a reason (the server's liveliness token went),
-    the query fails with that reason at once instead of waiting for its deadline.
+    Zenoh hands the reply (and the query's end, with or without one) to a callback in its own
+    thread; ``on_reply`` is called there too, so a caller that waits on something else (a tree
+    that waits between ticks) wakes as soon as there is something to poll. ``gone`` is asked on
+    every poll; when it returns a reason (the server's liveliness token went), the query fails with
+    that reason at once instead of waiting for its deadline.
 
     Args:
         session: the bus session.
@@ -118,6 +115,7 @@ class PendingReply:
         timeout_s: how long the reply may take.
         gone: says why the server is gone, if it is.
         limits: the largest reply accepted.
+        on_reply: called (from Zenoh's thread) when the reply arrives or the query ends without one.
     """
 
     def __init__(
@@ -129,17 +127,34 @@ class PendingReply:
         timeout_s: float = 10.0,
         gone: Callable[[], str | None] | None = None,
         limits: Limits = DEFAULT_LIMITS,
+        on_reply: Callable[[], None] | None = None,
     ) -> None:
         self.key = key
         self.timeout_s = timeout_s
         self._gone = gone
         self._limits = limits
+        self._on_reply = on_reply
+        self._reply: zenoh.Reply | None = None
+        self._arrived = threading.Event()  # set once there is a reply, or there will be none
         self._started = time.monotonic()
-        self._replies = session.get(key, payload=encode(meta or {}, arrays), timeout=timeout_s)
+        session.get(key, zenoh.handlers.Callback(self._received, self._ended),
+                    payload=encode(meta or {}, arrays), timeout=timeout_s)
 
     @property
     def elapsed_s(self) -> float:
         return time.monotonic() - self._started
+
+    def _received(self, reply: zenoh.Reply) -> None:
+        if self._reply is None:  # the first reply counts, as it did through a channel
+            self._reply = reply
+        self._arrived.set()
+        if self._on_reply is not None:
+            self._on_reply()
+
+    def _ended(self) -> None:
+        self._arrived.set()
+        if self._on_reply is not None:
+            self._on_reply()
 
     def poll(self) -> Message | None:
         """The reply if it has come, None while waiting; raises QueryFailed when there will be none.
@@ -150,12 +165,12 @@ class PendingReply:
         Raises:
             QueryFailed: no reply within the timeout, nobody serves the key, or the world is gone.
         """
-        try:
-            reply = self._replies.try_recv()
-        except zenoh.ZError:
+        ended = self._arrived.is_set()  # read first: a reply is stored before the event is set
+        reply = self._reply
+        if reply is None and ended:
             if self.elapsed_s >= self.timeout_s * 0.99:
-                raise QueryFailed(f"{self.key}: no reply within {self.timeout_s:.1f} s") from None
-            raise QueryFailed(f"{self.key}: nobody serves this key (is the world running?)") from None
+                raise QueryFailed(f"{self.key}: no reply within {self.timeout_s:.1f} s")
+            raise QueryFailed(f"{self.key}: nobody serves this key (is the world running?)")
         if reply is None:
             reason = self._gone() if self._gone else None
             if reason:
@@ -175,11 +190,11 @@ class PendingReply:
             raise QueryFailed(f"{self.key}: {message.meta.get('error', 'the reply says it failed, without a reason')}")
         return message
 
-    def wait(self, poll_interval_s: float = 0.001) -> Message:
+    def wait(self, check_s: float = 0.05) -> Message:
         """Block until the reply (for command-line tools and tests, never inside a tree tick).
 
         Args:
-            poll_interval_s: how long to sleep between polls.
+            check_s: the longest it waits without asking whether the server is gone.
 
         Returns:
             The reply.
@@ -188,7 +203,7 @@ class PendingReply:
             QueryFailed: there will be no reply.
         """
         while (message := self.poll()) is None:
-            time.sleep(poll_interval_s)
+            self._arrived.wait(check_s)
         return message
 
 

@@ -54,9 +54,10 @@ def shortcut_overrides(args: argparse.Namespace) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from agent.app.runtime.run import RunError, RunRequest, new_run_id, run_episode
-    from agent.app.runtime.progress import StepPrinter
+    from agent.app.runtime.episode_bus import EpisodeBus
+    from agent.app.runtime.request import RunRequest, new_run_id, process_started_at
 
+    started_at = process_started_at()
     try:
         seed, scenario, what = _episode_choice(args)
     except ValueError as error:
@@ -66,11 +67,19 @@ def _run(args: argparse.Namespace) -> int:
     config = load_settings(args)
     request = RunRequest(seed=seed, config=config, out_root=args.out, connect=args.connect,
                          namespace=args.namespace, scenario=scenario, run_id=new_run_id(seed),
-                         viewer=_started_viewer(args.viewer))
+                         viewer=_started_viewer(args.viewer), started_at=started_at)
     print(f"homebot run: {what}, {'joining ' + args.connect if args.connect else 'starting a world'}; "
           f"watch with `homebot watch --run {request.run_id}`", flush=True)
+    bus = EpisodeBus.open(request)
     try:
-        result = run_episode(request, extra_sinks=[StepPrinter(sys.stdout)])
+        bus.start_world()  # now, to come up while the rest of the runtime loads
+        from agent.app.runtime.progress import StepPrinter
+        from agent.app.runtime.run import RunError, run_episode
+    except BaseException:
+        bus.close()
+        raise
+    try:
+        result = run_episode(request, extra_sinks=[StepPrinter(sys.stdout)], bus=bus)
     except RunError as error:
         print(f"homebot run: {error}", file=sys.stderr)
         return 1
@@ -83,16 +92,18 @@ def _run(args: argparse.Namespace) -> int:
               f"({result['ground_truth_text']}): {verdict}, {result['steps']} steps, {result['seconds']:.1f} s")
     else:
         print(f"episode failed: {result['reason']}", file=sys.stderr)
+    if "startup_s" in result:
+        print(f"first observation {result['startup_s']:.1f} s after `homebot run` started")
     print(f"run folder: {result['folder']}")
     return 0 if result["status"] == "answered" else 1
 
 
 def _started_viewer(wanted: bool) -> LiveViewer | None:
     """The live viewer ``--viewer`` asks for, started, its address printed; None without it."""
-    from agent.app.runtime.viewer import LiveViewer
-
     if not wanted:
         return None
+    from agent.app.runtime.viewer import LiveViewer
+
     viewer = LiveViewer.for_this_machine()
     viewer.start()
     print(f"homebot run: {viewer.describe()}", flush=True)

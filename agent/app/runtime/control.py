@@ -4,7 +4,8 @@
 requests. The ticking thread asks it before every tick (`before_tick`) and before every behaviour
 ticks (`before_behaviour`, through the per-instance wrapper `instrument` puts on each behaviour's
 ``tick``); while the episode is paused it waits there on a condition, never spinning, and the time
-spent so is not counted against the episode's wall-clock limit. Requests name behaviours by name;
+spent so is not counted against the episode's wall-clock limit. A request also calls the wake the
+runner registered (`wake_with`), so a tree waiting between ticks for a reply comes to it at once. Requests name behaviours by name;
 a name the tree does not hold is refused, listing the names it does.
 
 A pending fault takes effect on the behaviour's next tick: ``failure`` makes that tick return
@@ -65,6 +66,16 @@ class EpisodeControl:
         self._breakpoints: set[str] = set()
         self._faults: dict[str, str] = {}
         self._injected: list[dict[str, Any]] = []
+        self._wake: Callable[[], None] = lambda: None
+
+    def wake_with(self, wake: Callable[[], None]) -> None:
+        """Call ``wake`` whenever a request asks the ticking thread to do something (pause, go on,
+        step, inject), and when a step pauses the tree: the runner's wait between ticks ends then.
+
+        Args:
+            wake: ends the ticking thread's wait between ticks.
+        """
+        self._wake = wake
 
     # Requests (any thread).
 
@@ -89,6 +100,7 @@ class EpisodeControl:
         with self._condition:
             self._paused = True
             self._step_until = None
+            self._wake()
             self._settle(None, settle_s)
 
     def resume(self) -> None:
@@ -98,6 +110,7 @@ class EpisodeControl:
             self._step_until = None
             self._paused_before = None
             self._condition.notify_all()
+        self._wake()
 
     def step(self, settle_s: float = 0.0) -> None:
         """Run until the next tick boundary, then pause; wait up to ``settle_s`` for it.
@@ -118,6 +131,7 @@ class EpisodeControl:
             self._paused_before = None
             self._step_until = self._ticks + 1
             self._condition.notify_all()
+            self._wake()
             self._settle(self._waits, settle_s)
 
     def set_breakpoint(self, behaviour: str, on: bool) -> None:
@@ -152,6 +166,7 @@ class EpisodeControl:
             raise ControlRefused(f"inject.fault: expected one of {', '.join(FAULTS)}, got {fault!r}")
         with self._condition:
             self._faults[behaviour] = fault
+        self._wake()
 
     # The ticking thread.
 
@@ -183,6 +198,7 @@ class EpisodeControl:
             if self._step_until is not None and ticks >= self._step_until:
                 self._paused = True
                 self._step_until = None
+                self._wake()
 
     def before_behaviour(self, behaviour: str) -> dict[str, Any] | None:
         """Wait at a breakpoint on ``behaviour``; then take its pending fault, if any.

@@ -3,11 +3,19 @@
 py_trees lets an exception inside a behaviour escape `tick()`. The runner catches it, names the
 behaviour it came from, and ends the episode as a failure with that reason, so a bug in one leaf
 is a recorded outcome rather than a crash.
+
+Between ticks of a tree that is RUNNING the runner neither spins nor sleeps a fixed time: it waits
+on its ``wake``, which it hands every behaviour as py_trees' ``setup(wake=...)`` argument. A leaf
+that waits on something (a world command's reply, a VLM's answer, an arm's act in a worker) calls
+it when that is in, and the tree ticks at once; the control calls it on a request. Without a
+call, the tree ticks again after ``max_wait_s`` all the same (a leaf that waits on nothing that
+calls it, the episode's time limit).
 """
 
 from __future__ import annotations
 
 import logging
+import threading
 import time
 import traceback
 from collections.abc import Callable
@@ -47,31 +55,36 @@ class EpisodeRunner:
     wall-clock limit nor in the episode's seconds.
 
     Args:
-        root: the tree (set up here).
+        root: the tree (set up here, with ``wake`` handed to every behaviour's ``setup``).
         run_id: the run's id, in every snapshot.
         sinks: where the snapshots go (only those of ticks that changed what a viewer sees, and the
             first and last; see `agent.app.runtime.snapshot`).
         max_seconds: the episode's wall-clock limit.
-        tick_period_s: the least time between ticks.
+        tick_period_s: the least time between ticks (0: a woken tree ticks at once).
         timer: times the stages, if given.
         control: pauses, steps and faults from outside (default: one nobody asks, which changes nothing).
+        max_wait_s: the longest a RUNNING tree waits between ticks when nothing wakes it.
     """
 
     def __init__(self, root: py_trees.behaviour.Behaviour, run_id: str, sinks: list[SnapshotSink],
-                 max_seconds: float, tick_period_s: float = 0.002,
-                 timer: Any | None = None, control: EpisodeControl | None = None) -> None:
+                 max_seconds: float, tick_period_s: float = 0.0,
+                 timer: Any | None = None, control: EpisodeControl | None = None,
+                 max_wait_s: float = 0.05) -> None:
+        self.wake = threading.Event()  # set by a leaf whose reply is in, or by the control
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup()  # the leaves make their executors
+        self.tree.setup(wake=self.wake.set)  # the leaves make their executors and keep the wake
         self.visitor = py_trees.visitors.SnapshotVisitor()
         self.tree.visitors.append(self.visitor)
         self.run_id = run_id
         self.sinks = sinks
         self.max_seconds = max_seconds
         self.tick_period_s = tick_period_s
+        self.max_wait_s = max_wait_s
         self.timer = timer
         self.blackboard = py_trees.blackboard.Client(name="EpisodeRunner")
         self.blackboard.register_key(bb.ANSWER, access=py_trees.common.Access.READ)
         self.control = control or EpisodeControl(b.name for b in root.iterate())
+        self.control.wake_with(self.wake.set)
         instrument(root, self.control)
 
     def run(self) -> EpisodeOutcome:
@@ -87,6 +100,7 @@ class EpisodeRunner:
         encoder = SnapshotEncoder(self.run_id)
         try:
             while True:
+                self.wake.clear()  # what comes in from here on, during the tick too, ends the wait after it
                 self.control.before_tick()
                 ticks += 1
                 tick_started, paused_before_tick = time.perf_counter(), self.control.paused_s
@@ -103,7 +117,7 @@ class EpisodeRunner:
                 if outcome is not None:
                     return outcome
                 if self.tree.root.status == Status.RUNNING:
-                    time.sleep(self.tick_period_s)
+                    self._wait(tick_started)
         except KeyboardInterrupt:
             return EpisodeOutcome("interrupted", f"interrupted (SIGINT) during tick {ticks}", None, ticks,
                                   time.monotonic() - started)
@@ -112,6 +126,14 @@ class EpisodeRunner:
             self.control.finish()
             self.tree.root.stop(Status.INVALID)  # terminate whatever is still RUNNING
             self.tree.shutdown()
+
+    def _wait(self, tick_started: float) -> None:
+        """Wait until something wakes the tree, at most ``max_wait_s``, and at least until
+        ``tick_period_s`` has passed since the tick (``tick_started``, perf_counter) began."""
+        self.wake.wait(self.max_wait_s)
+        rest = tick_started + self.tick_period_s - time.perf_counter()
+        if rest > 0:
+            time.sleep(rest)  # a pace the settings ask for, to slow the episode down
 
     def _outcome(self, error: tuple[str, str] | None, ticks: int, elapsed: float) -> EpisodeOutcome | None:
         """How the episode ended on this tick, or None while it goes on."""

@@ -124,3 +124,10 @@ class Recorder:
 
 
 _NOTHING = object()  # what was logged before anything was
+
+
+def warm_up() -> None:
+    """Make once, and drop, what the first tick would log first: Rerun's first array (pyarrow loads
+    its pandas support for it, a third of a second). For a thread started while the world comes
+    up, so that the episode's first tick does not wait for it; nothing is logged."""
+    rr.Scalars(0.0)

@@ -4,19 +4,17 @@ from __future__ import annotations
 
 import json
 import logging
-import os
+import threading
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import py_trees
 
 from behaviours import blackboard as bb
-from worlds.bus.keys import Keys, check_namespace
+from worlds.bus.keys import Keys
 from worlds.bus.rpc import QueryFailed
-from worlds.bus.session import free_tcp_endpoint
-from agent.app.agents import announce, open_agent_session
 from agent.app.config import Config
 from agent.eqa.calibration import CalibrationError
 from agent.app.runtime.calibrations import calibration_for
@@ -25,15 +23,16 @@ from agent.mapping.occupancy import ExplorationMap
 from agent.app.runtime.control import EpisodeControl
 from agent.app.runtime.control_bus import ControlServer
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner, SnapshotSink
-from agent.app.runtime.plots import save_map_png
+from agent.app.runtime.episode_bus import EpisodeBus
 from agent.app.runtime.plugged import PlugError, make_plugged_skills, plug_into
 from agent.app.runtime.record import SnapshotLog, write_json_atomic
-from agent.app.runtime.recording import Recorder
-from agent.app.runtime.viewer import RECORDING_FILE, LiveViewer
+from agent.app.runtime.recording import Recorder, warm_up
+from agent.app.runtime.request import RunRequest
+from agent.app.runtime.viewer import RECORDING_FILE
 from agent.pose import Pose2D
 from agent.timing import StageTimer
 from worlds.bus.link import WorldLink
-from agent.app.runtime.world_process import WorldProcess, WorldStartError
+from agent.app.runtime.world_process import WorldStartError
 from agent.vlm.backends import make_vlm
 from agent.vlm.errors import VLMError
 from agent.vlm.protocol import VisionLanguageModel
@@ -43,74 +42,42 @@ from worlds.bus.questions import LETTERS
 
 log = logging.getLogger(__name__)
 
-DEFAULT_NAMESPACE = "homebot/default"
-
-
-@dataclass(frozen=True)
-class RunRequest:
-    seed: int
-    config: Config
-    out_root: Path = Path("runs")
-    connect: str | None = None  # a running world's endpoint; None spawns one
-    namespace: str | None = None
-    run_id: str | None = None
-    scenario: dict[str, Any] | None = None  # a suite's scenario; None lets the world draw one from the seed
-    scene: dict[str, Any] | None = None  # a scene spec; None lets the world generate the seed's home
-    save_map: bool = True  # the map picture costs ~0.3 s; evaluations of many episodes skip it
-    record: bool = True  # write recording.rrd (agent.app.runtime.recording); evaluations keep none unless asked
-    viewer: LiveViewer | None = None  # a started viewer the recording streams to as it is written
-
 
 class RunError(RuntimeError):
     """The episode could not start (no world, a bad reset); the run folder says so too."""
 
 
-def new_run_id(seed: int) -> str:
-    """A run id that sorts by time and names the seed: ``<date>-<time>-seed<seed>-<4 hex digits>``.
-
-    Args:
-        seed: the episode's seed.
-
-    Returns:
-        The id.
-    """
-    return f"{time.strftime('%Y%m%d-%H%M%S')}-seed{seed}-{os.urandom(2).hex()}"
-
-
 def run_episode(request: RunRequest, timer: StageTimer | None = None,
-                extra_sinks: list[SnapshotSink] | None = None) -> dict[str, Any]:
+                extra_sinks: list[SnapshotSink] | None = None, bus: EpisodeBus | None = None) -> dict[str, Any]:
     """Run one episode and return its result (also written to ``<out_root>/<run_id>/result.json``).
 
     Args:
         request: what to run: seed, settings, scene, where results go, which world.
         timer: times the stages, if given.
         extra_sinks: where else the tree's snapshots go.
+        bus: the episode's end of the bus, opened beforehand for this request (`EpisodeBus.open`),
+            its world perhaps started already; opened here when None, closed here either way.
+            The world is started once the settings proved usable (the VLM, the calibration, the
+            skills plugged into the tree), unless it was started before.
 
     Returns:
         The result.
     """
-    run_id = request.run_id or new_run_id(request.seed)
-    namespace = check_namespace(request.namespace or (DEFAULT_NAMESPACE if request.connect else f"homebot/{run_id}"))
-    folder = request.out_root / run_id
-    folder.mkdir(parents=True, exist_ok=True)
-    config = request.config
-    keys = Keys(namespace)
-    endpoint = request.connect or free_tcp_endpoint()
-    result: dict[str, Any] = {"run_id": run_id, "seed": request.seed, "namespace": namespace,
-                              "world": "connected" if request.connect else "spawned", "endpoint": endpoint}
-    world: WorldProcess | None = None
-    session, result["listen"] = open_agent_session(list(config.bus.listen), [endpoint])
-    token = announce(session, run_id, namespace, result["listen"])
-    link = WorldLink(session, keys, config.bus.query_timeout_s)
+    started_at = time.time() if request.started_at is None else request.started_at
+    bus = bus or EpisodeBus.open(request)
+    config, folder, link = request.config, bus.folder, bus.link
+    result: dict[str, Any] = {"run_id": bus.run_id, "seed": request.seed, "namespace": bus.namespace,
+                              "world": "connected" if request.connect else "spawned", "endpoint": bus.endpoint,
+                              "listen": bus.listen}
+    first_observation = FirstObservation()
     try:
-        vlm = make_vlm(config.vlm)  # a bad model path or backend fails now, before any world starts
+        vlm = make_vlm(config.vlm)  # a bad model path or backend fails now
         stopping, result["stop"] = _stopping_rule(config)  # so does a calibration that does not fit
         plugged = make_plugged_skills(config.tree, link)  # and a skill the settings put into the tree
-        if request.connect is None:
-            world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
-            world.wait_ready(link, config.bus.world_start_timeout_s)
-        elif not link.liveness.wait_alive(config.bus.world_start_timeout_s):
-            raise WorldStartError(f"no world answers under {namespace!r} at {endpoint}")
+        bus.start_world()
+        if request.record:
+            threading.Thread(target=warm_up, name="recording warm-up", daemon=True).start()
+        bus.wait_ready(config.bus.world_start_timeout_s)
         reset_request: dict[str, Any] = {"seed": request.seed}
         if request.scenario is not None:
             reset_request["scenario"] = request.scenario
@@ -119,9 +86,10 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         reset = link.call("reset", reset_request, timeout_s=config.bus.world_start_timeout_s)
         scenario = reset.meta["scenario"]
         result.update(_scenario_fields(scenario, config))
-        recorder = _recorder(request, folder / RECORDING_FILE, run_id)
-        outcome, world_map, trajectory = _run_tree(run_id, scenario, reset.meta, config, vlm, stopping, link,
-                                                   session, keys, folder, timer, extra_sinks or [], plugged, recorder)
+        recorder = _recorder(request, folder / RECORDING_FILE, bus.run_id)
+        outcome, world_map, trajectory = _run_tree(bus.run_id, scenario, reset.meta, config, vlm, stopping, link,
+                                                   bus.session, Keys(bus.namespace), folder, timer,
+                                                   extra_sinks or [], plugged, recorder, first_observation)
         evaluation = _episode_report(link, config.bus.query_timeout_s)
     except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError, PlugError) as error:
         reason = f"the episode could not start: {error}"
@@ -134,18 +102,17 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         write_json_atomic(folder / "result.json", result)
         return {**result, "folder": str(folder)}
     finally:
-        link.close()
-        if world is not None:
-            world.stop()
-        if token is not None:
-            token.undeclare()
-        session.close()
+        bus.close()
+    if first_observation.at is not None:
+        result["startup_s"] = round(first_observation.at - started_at, 3)
     result.update(_outcome_fields(outcome, result))
     result["evaluation"] = evaluation
     if timer is not None:
         result["timings"] = timer.summary()
     write_json_atomic(folder / "result.json", result)
     if request.save_map:
+        from agent.app.runtime.plots import save_map_png  # matplotlib is loaded only to draw
+
         save_map_png(folder / "map.png", world_map, trajectory, result)
     result["folder"] = str(folder)
     return result
@@ -155,7 +122,8 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
               vlm: VisionLanguageModel, stopping: StoppingRule,
               link: WorldLink, session: Any, keys: Keys, folder: Path, timer: StageTimer | None,
               extra_sinks: list[SnapshotSink], plugged: list[tuple[str, PortedSkill]],
-              recorder: Recorder | None = None) -> tuple[EpisodeOutcome, ExplorationMap, list]:
+              recorder: Recorder | None = None, first_observation: FirstObservation | None = None
+              ) -> tuple[EpisodeOutcome, ExplorationMap, list]:
     py_trees.blackboard.Blackboard.clear()
     start = Pose2D.of(reset_meta["base_pose"])
     writer = bb.seed_board(bb.EpisodeStart(scenario["question"], list(scenario["choices"]),
@@ -173,9 +141,11 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     root = build_eqa_tree(parts)
     plug_into(root, plugged)
     control = EpisodeControl(behaviour.name for behaviour in root.iterate())
-    runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds,
-                           config.episode.tick_period_s, timer, control)
+    runner = EpisodeRunner(root, run_id, sinks, config.episode.max_seconds, config.episode.tick_period_s,
+                           timer, control, config.episode.max_wait_s)
     control_server = ControlServer(session, keys, control)
+    if first_observation is not None:
+        runner.tree.add_post_tick_handler(first_observation)
     if recorder is not None:
         runner.tree.add_post_tick_handler(recorder.after_tick)
     try:
@@ -206,6 +176,18 @@ def _run_tree(run_id: str, scenario: dict[str, Any], reset_meta: dict[str, Any],
     # interpreter exit, where open3d reports any device memory still held as a leak and fails.
     py_trees.blackboard.Blackboard.clear()
     return outcome, world_map, trajectory
+
+
+class FirstObservation:
+    """A post-tick handler that notes when (epoch s) the first tick that put an observation on the
+    board ended: the episode's first frame is in, decoded and on the board."""
+
+    def __init__(self) -> None:
+        self.at: float | None = None
+
+    def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
+        if self.at is None and py_trees.blackboard.Blackboard.exists(bb.OBSERVATION):
+            self.at = time.time()
 
 
 def _recorder(request: RunRequest, path: Path, run_id: str) -> Recorder | None:

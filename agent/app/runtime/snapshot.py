@@ -18,7 +18,7 @@ from typing import Any
 
 import py_trees
 
-from agent.app.runtime.readable import readable
+from agent.app.runtime.board_texts import BoardTexts, writable_by
 
 SNAPSHOT_VERSION = 2
 
@@ -40,11 +40,13 @@ class SnapshotEncoder:
     def __init__(self, run: str, full_every_s: float = 5.0) -> None:
         self.run = run
         self.full_every_s = full_every_s
-        self._structure: list[tuple[Any, str, str, Any]] | None = None
+        self._structure: list[tuple[Any, str, Any]] | None = None
         self._ids: dict[Any, str] = {}
+        self._tree: list[dict[str, Any]] = []  # the structure as snapshots carry it
         self._behaviours: dict[str, list[str]] = {}
         self._visited: list[str] = []
         self._board: dict[str, str] = {}
+        self._texts = BoardTexts()
         self._activity: list[dict[str, Any]] = []
         self._full_at = 0.0
         py_trees.blackboard.Blackboard.enable_activity_stream(maximum_size=100_000)
@@ -63,16 +65,19 @@ class SnapshotEncoder:
         Returns:
             The snapshot, or None.
         """
-        self._drain_activity(tick)
+        written = self._drain_activity(tick)
         nodes = list(_pre_order(root))
-        structure = [(b.id, b.name, type(b).__name__, b.parent.id if b.parent else None) for b in nodes]
-        full = structure != self._structure or time.monotonic() - self._full_at >= self.full_every_s
-        if structure != self._structure:
+        structure = [(b, b.name, b.parent) for b in nodes]  # the behaviours themselves: compared by identity
+        new_structure = structure != self._structure
+        full = new_structure or time.monotonic() - self._full_at >= self.full_every_s
+        if new_structure:
             self._structure, self._ids = structure, _short_ids([b.id for b in nodes])
-        behaviours = {self._ids[b.id]: [b.status.value, b.feedback_message] for b in nodes}
+            self._tree = [{"id": self._ids[b.id], "name": b.name, "type": type(b).__name__,
+                           "parent": self._ids[b.parent.id] if b.parent else None} for b in nodes]
+        behaviours = {node["id"]: [b.status.value, b.feedback_message] for node, b in zip(self._tree, nodes)}
         visited = [self._ids[i] for i in visitor.visited if i in self._ids]
-        storage = py_trees.blackboard.Blackboard.storage
-        board = {key: readable(storage[key]) for key in sorted(storage)}
+        changed = None if written is None else written | writable_by(b for b in nodes if b.id in visitor.visited)
+        board = self._texts.texts(py_trees.blackboard.Blackboard.storage, changed)
         changed_behaviours = {i: v for i, v in behaviours.items() if self._behaviours.get(i) != v}
         changed_board = {k: v for k, v in board.items() if self._board.get(k) != v}
         gone = sorted(set(self._board) - set(board))
@@ -83,9 +88,7 @@ class SnapshotEncoder:
         if full:
             self._full_at = time.monotonic()
             data["full"] = True
-            data["tree"] = [{"id": self._ids[node_id], "name": name, "type": kind,
-                             "parent": self._ids[parent] if parent else None}
-                            for node_id, name, kind, parent in structure]
+            data["tree"] = [dict(node) for node in self._tree]
         data["behaviours"] = behaviours if full else changed_behaviours
         data["visited"] = visited
         data["blackboard"] = board if full else changed_board
@@ -99,12 +102,14 @@ class SnapshotEncoder:
         """Stop recording blackboard activity."""
         py_trees.blackboard.Blackboard.disable_activity_stream()
 
-    def _drain_activity(self, tick: int) -> None:
+    def _drain_activity(self, tick: int) -> set[str] | None:
         """Move this tick's board writes from py_trees' stream into the next snapshot (once per
-        key, writer and kind of write)."""
+        key, writer and kind of write); return the keys written (None: no stream, any may have
+        changed)."""
         stream = py_trees.blackboard.Blackboard.activity_stream
         if stream is None:
-            return
+            return None
+        written = {item.key for item in stream.data if item.activity_type in _WRITES}
         seen = {(a["tick"], a["key"], a["by"], a["op"]) for a in self._activity if a["tick"] == tick}
         for item in stream.data:
             op = _WRITES.get(item.activity_type)
@@ -113,6 +118,7 @@ class SnapshotEncoder:
             seen.add((tick, item.key, item.client_name, op))
             self._activity.append({"tick": tick, "key": item.key, "by": item.client_name, "op": op})
         stream.clear()
+        return written
 
 
 def _short_ids(ids: list[Any]) -> dict[Any, str]:
@@ -125,8 +131,10 @@ def _short_ids(ids: list[Any]) -> dict[Any, str]:
     return dict(zip(ids, texts))
 
 
-def _pre_order(behaviour: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
+def _pre_order(root: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
     """Parents before their children, children in tick order (py_trees' iterate() is post-order)."""
-    yield behaviour
-    for child in behaviour.children:
-        yield from _pre_order(child)
+    stack = [root]
+    while stack:
+        behaviour = stack.pop()
+        yield behaviour
+        stack.extend(reversed(behaviour.children))

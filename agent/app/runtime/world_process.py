@@ -25,14 +25,21 @@ class WorldProcess:
         endpoint: the endpoint the world listens on.
         camera: the head camera's settings.
         log_path: the world's log file.
+        connect: endpoints the world connects to (the agent's, listening already: the two meet as
+            soon as the world is up, with no retries on either side).
+        seed: the home it builds at start, before it answers (a first reset to just this seed is
+            answered with it).
     """
 
-    def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path) -> None:
+    def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path,
+                 connect: list[str] | None = None, seed: int | None = None) -> None:
         self.log_path = log_path
         command = [
             sys.executable, "-m", "worlds.server",
             "--namespace", namespace,
             "--listen", endpoint,
+            *(word for other in connect or [] for word in ("--connect", other)),
+            *(("--seed", str(seed)) if seed is not None else ()),
             "--width", str(camera.width),
             "--height", str(camera.height),
             "--hfov", str(camera.hfov_deg),

@@ -1,0 +1,113 @@
+"""An episode's end of the bus, opened first: the agent's session and liveliness token, its link to
+the world, and the world, spawned or joined.
+
+Light to import, so that `homebot run` opens it and starts the world before it loads the rest of
+the runtime: a spawned world starts, and builds the seed's home, while the agent imports its
+libraries and builds its tree. The agent listens before the world starts, and the world connects
+to it, so neither side waits for the other to come up or retries a connection (an agent that
+listens nowhere connects to the world instead).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import zenoh
+
+from agent.app.agents import announce, open_agent_session
+from agent.app.runtime.request import DEFAULT_NAMESPACE, RunRequest, new_run_id
+from agent.app.runtime.world_process import WorldProcess, WorldStartError
+from worlds.bus.keys import Keys, check_namespace
+from worlds.bus.link import WorldLink
+from worlds.bus.session import free_tcp_endpoint
+
+
+@dataclass
+class EpisodeBus:
+    """The run's id, namespace and folder, the agent's session (listening on ``listen``) and token,
+    the link to the world at ``endpoint``, the world process once it was spawned here, and the
+    request it was opened for."""
+
+    run_id: str
+    namespace: str
+    folder: Path
+    endpoint: str
+    session: zenoh.Session
+    listen: list[str]
+    token: zenoh.LivelinessToken | None
+    link: WorldLink
+    world: WorldProcess | None
+    request: RunRequest
+
+    @classmethod
+    def open(cls, request: RunRequest) -> EpisodeBus:
+        """Open the agent's session, announce it, and make the link to the world (not started yet:
+        `start_world`).
+
+        Args:
+            request: the episode.
+
+        Returns:
+            The bus.
+
+        Raises:
+            worlds.bus.session.EndpointError: an endpoint cannot be opened.
+        """
+        run_id = request.run_id or new_run_id(request.seed)
+        namespace = check_namespace(request.namespace or (DEFAULT_NAMESPACE if request.connect else f"homebot/{run_id}"))
+        folder = request.out_root / run_id
+        folder.mkdir(parents=True, exist_ok=True)
+        config = request.config
+        endpoint = request.connect or free_tcp_endpoint()
+        # a spawned world connects to the agent; an agent that listens nowhere connects to the world
+        connect = [endpoint] if request.connect or not config.bus.listen else []
+        session, listen = open_agent_session(list(config.bus.listen), connect)
+        token = None
+        try:
+            token = announce(session, run_id, namespace, listen)
+            link = WorldLink(session, Keys(namespace), config.bus.query_timeout_s)
+        except BaseException:
+            _close(session, token, None, None)
+            raise
+        return cls(run_id, namespace, folder, endpoint, session, listen, token, link, None, request)
+
+    def start_world(self) -> None:
+        """Spawn the world, unless the request joins one or it is spawned already; it builds its
+        seed's home at start when the request asks for neither a scenario nor a scene."""
+        request = self.request
+        if request.connect is not None or self.world is not None:
+            return
+        prepared = request.seed if request.scenario is None and request.scene is None else None
+        self.world = WorldProcess(self.namespace, self.endpoint, request.config.camera, self.folder / "world.log",
+                                  self.listen, prepared)
+
+    def wait_ready(self, timeout_s: float) -> None:
+        """Wait until the world's liveliness token is there.
+
+        Args:
+            timeout_s: how long to wait.
+
+        Raises:
+            agent.app.runtime.world_process.WorldStartError: the world exited, was too slow, or
+                none answers at the endpoint joined.
+        """
+        if self.world is not None:
+            self.world.wait_ready(self.link, timeout_s)
+        elif not self.link.liveness.wait_alive(timeout_s):
+            raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}")
+
+    def close(self) -> None:
+        """Stop the world spawned here, withdraw the token and close the session."""
+        _close(self.session, self.token, self.link, self.world)
+
+
+def _close(session: zenoh.Session, token: zenoh.LivelinessToken | None, link: WorldLink | None,
+           world: WorldProcess | None) -> None:
+    if link is not None:
+        link.close()
+    if world is not None:
+        world.stop()
+    if token is not None:
+        token.undeclare()
+    session.close()
