@@ -10,13 +10,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-import py_trees
 from py_trees.common import Status
 
 from agent.app.cli.options import Commands, add_config_options, load_settings
 from skills.context import SkillContext
 from skills.ports import PortError, PortedSkill
 from skills.registry import SkillError, SkillRegistry
+from skills.running import run_to_end
 
 
 def add_command(commands: Commands) -> None:
@@ -149,17 +149,11 @@ def run_skill_command(args: argparse.Namespace) -> int:
     return 0 if outcome["status"] == "SUCCESS" else 1
 
 
-def _tick_to_end(skill: PortedSkill, timeout_s: float, tick_s: float = 0.002) -> dict[str, Any]:
-    """Tick a one-skill tree until it ends; its status, feedback and outputs."""
-    tree = py_trees.trees.BehaviourTree(skill)
-    deadline = time.monotonic() + timeout_s
-    tree.tick()
-    while skill.status == Status.RUNNING and time.monotonic() < deadline:
-        time.sleep(tick_s)
-        tree.tick()
-    if skill.status == Status.RUNNING:
-        skill.stop(Status.INVALID)
-        return {"status": "FAILURE", "feedback": f"still running after {timeout_s:.0f} s", "outputs": {}}
+def _tick_to_end(skill: PortedSkill, timeout_s: float) -> dict[str, Any]:
+    """Run the skill to its end (ticked when a world reply wakes it); its status, feedback and outputs."""
+    result = run_to_end(skill, timeout_s)
+    if skill.status not in (Status.SUCCESS, Status.FAILURE):  # raised, or still running at the deadline
+        return {"status": "FAILURE", "feedback": result.message, "outputs": {}}
     outputs = {name: _plain(value) for name, value in skill.outputs.items()}
     return {"status": skill.status.name, "feedback": skill.feedback_message, "outputs": outputs}
 
