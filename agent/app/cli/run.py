@@ -59,6 +59,7 @@ def shortcut_overrides(args: argparse.Namespace) -> list[str]:
 def _run(args: argparse.Namespace) -> int:
     from agent.app.runtime.calibrations import stop_calibration
     from agent.app.runtime.episode_bus import EpisodeBus
+    from agent.app.runtime.plugged import PlugError, make_plugged_skills
     from agent.app.runtime.request import RunRequest, new_run_id, process_started_at
     from agent.eqa.calibration import CalibrationError
 
@@ -82,9 +83,14 @@ def _run(args: argparse.Namespace) -> int:
           f"watch with `homebot watch --run {request.run_id}`", flush=True)
     bus = EpisodeBus.open(request)
     try:
+        make_plugged_skills(config.tree, bus.link)  # a skill or port misnamed: no world is started
         bus.start_world()  # now, to come up while the rest of the runtime loads
         from agent.app.runtime.progress import StepPrinter
         from agent.app.runtime.run import RunError, run_episode
+    except PlugError as error:
+        bus.close()
+        print(f"homebot run: {error}", file=sys.stderr)
+        return 2
     except BaseException:
         bus.close()
         raise
