@@ -69,15 +69,15 @@ def test_a_toml_file_sets_them_too(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("override, message", [
-    ("act.approach.views=0", "config: act.approach.views: 0 must be at least 1"),
+    ("act.approach.views=0", "config: act.approach.views: 0 must lie in [1, 100]"),
     ("act.approach.views=many", "config: act.approach.views: expected int, got 'many'"),
     ("act.approach.squeeze_m=0.5", "config: act.approach.squeeze_m: 0.5 must lie in [0, 0.15]"),
-    ("act.approach.viewpoint.bearings=0", "config: act.approach.viewpoint.bearings: 0 must be at least 1"),
-    ("act.approach.sightings.min_pixels=0", "config: act.approach.sightings.min_pixels: 0 must be at least 1"),
+    ("act.approach.viewpoint.bearings=0", "config: act.approach.viewpoint.bearings: 0 must lie in [1, 360]"),
+    ("act.approach.sightings.min_pixels=0", "config: act.approach.sightings.min_pixels: 0 must lie in [1, 10000000]"),
     ("act.approach.fast=1", "config: unknown key act.approach.fast (known here: done_m"),
     ("act.min_look.door=wide", "config: act.min_look.door: expected number, got 'wide'"),
     ("act.min_look.window=0.1", "config: act.min_look: {"),
-    ("act.stand.max_plans=0", "config: act.stand.margin_m must be ≥ 0 and act.stand.max_plans ≥ 1"),
+    ("act.stand.max_plans=0", "config: act.stand.max_plans: 0 must lie in [1, 1000]"),
 ])
 def test_a_bad_value_is_refused_naming_its_key(override: str, message: str,
                                                capsys: pytest.CaptureFixture[str]) -> None:

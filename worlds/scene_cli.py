@@ -86,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         home = read_spec_file(args.file)
     except SpecError as error:
-        print(f"{args.file}: invalid scene spec ({len(error.errors)} problems)", file=sys.stderr)
+        count = len(error.errors)
+        print(f"{args.file}: invalid scene spec ({count} problem{'s' if count != 1 else ''})", file=sys.stderr)
         for line in error.errors:
             print(f"  {line}", file=sys.stderr)
         return 1

@@ -94,12 +94,24 @@ def read_spec_file(path: str | Path) -> HomeSpec:
         SpecError: the file is unreadable, not JSON, or not a valid spec.
     """
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = json.loads(Path(path).read_text(encoding="utf-8"), parse_int=_integer)
     except OSError as error:
         raise SpecError([f"{path}: cannot read ({error.strerror or error})"]) from error
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise SpecError([f"{path}: not valid JSON ({error})"]) from error
+    except RecursionError:
+        raise SpecError([f"{path}: nested too deeply for a scene spec (a spec nests a few levels)"]) from None
     return load_spec(data)
+
+
+def _integer(text: str) -> int | float:
+    """A JSON integer; one outside the 64-bit range as a float (inf past the float range), which no
+    field of a spec takes, so its field's check names it instead of the parser or arithmetic failing."""
+    if len(text.lstrip("-")) <= 20:
+        value = int(text)
+        if -(2**63) <= value < 2**64:
+            return value
+    return float(text)
 
 
 def load_spec(data: Any) -> HomeSpec:

@@ -58,7 +58,7 @@ class FieldChecker:
             The object, or None (with the problems recorded).
         """
         if not isinstance(value, dict):
-            self.fail(path, f"expected an object, got {type(value).__name__}")
+            self.fail(path or "spec", f"expected an object, got {type(value).__name__}")
             return None
         ok = True
         for key in value:

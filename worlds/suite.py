@@ -4,6 +4,11 @@ A suite line names everything needed to replay its episode: the seed (the home a
 are both drawn from it), the scenario itself, and a checksum of the home's scene spec, so a suite
 made by an older generator is caught rather than silently replayed in a different home. Writing
 appends line by line and resumes: lines already in a file are kept and not made again.
+
+Reading checks every line: a file with no scenario, a line that is not an entry and two entries
+with one id are errors; only a torn last line after whole ones, what an interrupted append
+leaves, is dropped. `checked_entries` and `suite_entry` check each home against its checksum too,
+before any episode runs.
 """
 
 from __future__ import annotations
@@ -148,44 +153,112 @@ def write_suite(out_dir: Path, parts: list[SuitePart],
 
 
 def _kept_entries(path: Path) -> list[dict[str, Any]]:
-    """The file's whole entries, rewriting it without a torn last line so appends start clean."""
-    entries = read_suite(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
-    if len(lines) != len(entries) or not path.read_text(encoding="utf-8").endswith("\n"):
+    """The file's whole entries, rewriting it without a torn last line so appends start clean; an
+    empty file, or one whose only line is torn, is a suite make interrupted early: nothing is kept."""
+    entries, torn = _parse(path)
+    if torn or len(entries) != len(path.read_text(encoding="utf-8").splitlines()):
         path.write_text("".join(json.dumps(e, ensure_ascii=False) + "\n" for e in entries), encoding="utf-8")
     return entries
 
 
 def read_suite(path: Path) -> list[dict[str, Any]]:
-    """Every entry of a suite file, checked; a torn last line (an interrupted write) is dropped.
+    """Every entry of a suite file, checked. A torn last line (an interrupted ``suite make``: no
+    line end, not JSON) after whole entries is dropped with a warning; anywhere else a line that is
+    not an entry is an error. Blank lines are skipped.
 
     Args:
         path: the suite file.
 
     Returns:
-        The entries.
+        The entries, at least one.
 
     Raises:
-        SuiteError: a line, other than a torn last one, that is not a valid entry.
+        SuiteError: the file holds no entry (empty, or its only line torn), is not UTF-8, a line
+            other than a torn last one is not a valid entry, or two entries share an id.
     """
-    entries = []
-    lines = Path(path).read_text(encoding="utf-8").splitlines()
-    for number, line in enumerate(lines, start=1):
-        try:
-            entry = json.loads(line)
-        except json.JSONDecodeError:
-            if number == len(lines):
-                log.warning("%s: dropping a torn last line", path)
-                break
-            raise SuiteError(f"{path}:{number}: not valid JSON") from None
-        _check_entry(entry, f"{path}:{number}")
-        entries.append(entry)
+    entries, torn = _parse(path)
+    if not entries:
+        raise SuiteError(f"{path}: holds no scenarios" + (
+            ": its only line is not JSON (if an interrupted `homebot suite make` cut it short, run that "
+            "again to finish the file)" if torn else " (make a suite with `homebot suite make`)"))
+    if torn:
+        log.warning("%s: dropping a torn last line (an interrupted write); %d scenarios kept", path, len(entries))
     return entries
 
 
+def _parse(path: Path) -> tuple[list[dict[str, Any]], bool]:
+    """The file's entries, and whether its last line was torn: not JSON and not ended by a line
+    end, as an append cut short leaves it."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        line = error.object[:error.start].count(b"\n") + 1
+        raise SuiteError(f"{path}:{line}: not UTF-8 text ({error.reason})") from None
+    lines = text.splitlines()
+    entries: list[dict[str, Any]] = []
+    first_line_of: dict[str, int] = {}
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            entry = json.loads(line)
+        except (ValueError, RecursionError):  # not JSON, an integer of thousands of digits, deep nesting
+            if number == len(lines) and not text.endswith("\n"):
+                return entries, True
+            raise SuiteError(f"{path}:{number}: not valid JSON") from None
+        _check_entry(entry, f"{path}:{number}")
+        if entry["id"] in first_line_of:
+            raise SuiteError(f"{path}:{number}: scenario id {entry['id']!r} is already used on line "
+                             f"{first_line_of[entry['id']]}; each scenario needs its own id")
+        first_line_of[entry["id"]] = number
+        entries.append(entry)
+    return entries, False
+
+
+def checked_entries(path: Path, limit: int | None = None) -> list[dict[str, Any]]:
+    """The first ``limit`` entries of a suite file (all when None), each one's home checked: the
+    home its seed generates must have the scene spec checksum the line records, else the episode
+    would run in another home than the suite was made with.
+
+    Args:
+        path: the suite file.
+        limit: how many entries, from the first.
+
+    Returns:
+        The entries.
+
+    Raises:
+        SuiteError: as `read_suite`, or an entry whose home does not match, naming its id.
+    """
+    entries = read_suite(path)[:limit]
+    for entry in entries:
+        check_home(entry, path)
+    return entries
+
+
+def check_home(entry: dict[str, Any], path: Path) -> None:
+    """Refuse a suite entry whose seed does not generate the home its ``home_sha256`` records.
+
+    Args:
+        entry: an entry of `read_suite`.
+        path: its suite file, for the message.
+
+    Raises:
+        SuiteError: naming the scenario's id.
+    """
+    try:
+        checksum = spec_checksum(generate_home(entry["seed"]).to_dict())
+    except ValueError as error:
+        raise SuiteError(f"{path}: scenario {entry['id']}: {error}") from None
+    if checksum != entry["home_sha256"]:
+        raise SuiteError(f"{path}: scenario {entry['id']}: home_sha256 does not match the home seed {entry['seed']} "
+                         "generates (the suite was made by another version of homebot, or edited); make it again "
+                         "with `homebot suite make`")
+
+
 def suite_entry(path: Path, entry_id: str) -> dict[str, Any]:
-    """The entry of a suite file with id ``entry_id``; a SuiteError naming how many entries the
-    file holds, and the first few ids, when there is none.
+    """The entry of a suite file with id ``entry_id``, its home checked (`check_home`); a SuiteError
+    naming how many entries the file holds, and the first few ids, when there is none.
 
     Args:
         path: the suite file.
@@ -195,11 +268,12 @@ def suite_entry(path: Path, entry_id: str) -> dict[str, Any]:
         The entry.
 
     Raises:
-        SuiteError: no entry has that id.
+        SuiteError: as `read_suite`, no entry has that id, or its home does not match.
     """
     entries = read_suite(path)
     for entry in entries:
         if entry["id"] == entry_id:
+            check_home(entry, path)
             return entry
     shown = ", ".join(entry["id"] for entry in entries[:_IDS_SHOWN]) + (", …" if len(entries) > _IDS_SHOWN else "")
     raise SuiteError(f"{path}: no scenario with id {entry_id!r}; the suite holds {len(entries)} scenarios"

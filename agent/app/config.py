@@ -1,7 +1,9 @@
 """One typed configuration with defaults, overridable from a TOML file and from the command line.
 
-Every value is checked against the type of its default, and a bad one is rejected with its full
-dotted name, e.g. ``config: map.resolution: expected a number, got 'fine'``. Each section is the
+Every value is checked against the type of its default and, if a number or an address, against its
+range in `agent.app.config_bounds`; a bad one is rejected with its full dotted name, e.g.
+``config: map.resolution: expected a number, got 'fine'`` or ``config: map.resolution: 0.0 must
+lie in (0, 10]``. Each section is the
 settings class of the code it configures; ``act`` is the EQA tree's act branch (`LookInsideConfig`,
 with ``act.approach`` its `ApproachConfig` and ``act.stand`` the arm's stands), e.g.
 ``--set act.approach.views=3``.
@@ -11,13 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import tomllib
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agent.app.config_bounds import check_bounds
 from agent.eqa.stopping import StopConfig
 from agent.mapping.occupancy import OccupancyConfig
 from agent.mapping.semantic_map import SemanticValueConfig
@@ -63,12 +65,6 @@ class EpisodeSettings:
     tick_period_s: float = 0.0
     max_wait_s: float = 0.05
     vlm_timeout_s: float = 30.0
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.max_wait_s) and self.max_wait_s > 0):
-            raise ValueError(f"episode.max_wait_s: {self.max_wait_s!r} must be a number above 0")
-        if not (math.isfinite(self.tick_period_s) and self.tick_period_s >= 0):
-            raise ValueError(f"episode.tick_period_s: {self.tick_period_s!r} must be a number, 0 or above")
 
 
 @dataclass(frozen=True)
@@ -119,7 +115,7 @@ def load_config(path: Path | None = None, overrides: list[str] | None = None, ba
         base: the settings to start from (default: the defaults).
 
     Returns:
-        The settings, every value type-checked and each section's own checks passed.
+        The settings, every value type-checked, within its range, and each section's own checks passed.
 
     Raises:
         ConfigError: an unreadable file, a malformed override, an unknown key or a bad value; the
@@ -127,11 +123,7 @@ def load_config(path: Path | None = None, overrides: list[str] | None = None, ba
     """
     config = base or Config()
     if path is not None:
-        try:
-            data = tomllib.loads(Path(path).read_text())
-        except (OSError, tomllib.TOMLDecodeError) as error:
-            raise ConfigError(f"config file {path}: {error}") from None
-        config = merge(config, data)
+        config = merge(config, _read_toml(Path(path)))
     for item in overrides or []:
         key, sep, raw = item.partition("=")
         if not sep or not key:
@@ -153,7 +145,8 @@ def merge(config: Any, data: dict[str, Any], prefix: str = "") -> Any:
         A copy of ``config`` with the values applied.
 
     Raises:
-        ConfigError: an unknown key, a value of the wrong type, or one the section's checks refuse.
+        ConfigError: an unknown key, a value of the wrong type or out of its range
+            (`agent.app.config_bounds`), or one the section's checks refuse.
     """
     if not isinstance(data, dict):
         raise ConfigError(f"config: {prefix.rstrip('.') or 'top level'}: expected a table")
@@ -167,10 +160,13 @@ def merge(config: Any, data: dict[str, Any], prefix: str = "") -> Any:
         current = getattr(config, key)
         if dataclasses.is_dataclass(current):
             changes[key] = merge(current, value, f"{name}.")
-        elif isinstance(current, dict):
-            changes[key] = {**current, **_coerce(name, value, hints[key])}
-        else:
-            changes[key] = _coerce(name, value, hints[key])
+            continue
+        coerced = _coerce(name, value, hints[key])
+        changes[key] = {**current, **coerced} if isinstance(current, dict) else coerced
+        try:
+            check_bounds(name, changes[key])
+        except ValueError as error:
+            raise ConfigError(f"config: {error}") from None
     try:
         return dataclasses.replace(config, **changes)
     except ValueError as error:
@@ -209,13 +205,38 @@ def _coerce(name: str, value: Any, hint: Any) -> Any:
             return {_coerce(f"{name} key", k, key_type): _coerce(f"{name}.{k}", v, value_type)
                     for k, v in value.items()}
     type_name = getattr(hint, "__name__", str(hint)).replace("float", "number").replace("dict", "table")
-    raise ConfigError(f"config: {name}: expected {type_name}, got {value!r}")
+    raise ConfigError(f"config: {name}: expected {type_name}, got {_shown(value)}")
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)``, shortened to 60 characters."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:45]}…{text[-10:]}"
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    """The tables of a settings file; a file that cannot be read, is not UTF-8 or not TOML (an
+    integer of thousands of digits, nesting past Python's limit) is a ConfigError naming it."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        line = error.object[:error.start].count(b"\n") + 1
+        raise ConfigError(f"config file {path}: not UTF-8 text (line {line}, byte {error.start}: {error.reason})") from None
+    except OSError as error:
+        raise ConfigError(f"config file {path}: cannot be read ({error.strerror or error})") from None
+    try:
+        return tomllib.loads(text)
+    except ValueError as error:  # tomllib.TOMLDecodeError, or an integer too long to convert
+        raise ConfigError(f"config file {path}: not TOML: {error}") from None
+    except RecursionError:
+        raise ConfigError(f"config file {path}: not TOML that can be read: nested too deeply") from None
 
 
 def _parse_value(raw: str) -> Any:
+    """An override's value: JSON when it parses as JSON, else the bare string."""
     try:
         return json.loads(raw)
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):  # not JSON (or a number or nesting JSON cannot hold): a word
         return raw
 
 

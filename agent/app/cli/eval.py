@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import Commands, add_suite_run_options, suite_settings
+from agent.app.cli.options import Commands, add_suite_run_options, count_option, suite_settings
 
 RECORD_HELP = ("keep each episode's run folder with its Rerun recording under OUT/recordings "
                "(homebot replay opens one); without it evaluation episodes record nothing")
@@ -41,11 +41,11 @@ def add_command(commands: Commands) -> None:
     interactive.add_argument("--suite", choices=("tabletop",), default="tabletop",
                              help="the five tabletop tasks, ten variants each (homebot suite tabletop)")
     interactive.add_argument("--tasks", default=None, help="comma separated (default: all five)")
-    interactive.add_argument("--variants", type=int, default=10, help="variants per task (default 10)")
+    interactive.add_argument("--variants", type=count_option, default=10, help="variants per task (default 10)")
     interactive.add_argument("--executor", choices=("symbolic", "robot"), default="symbolic",
                              help="symbolic: perfect perception and skills (the decision logic alone); "
                                   "robot: the arm in PyBullet, perceiving with its cameras")
-    interactive.add_argument("--workers", type=int, default=1,
+    interactive.add_argument("--workers", type=count_option, default=1,
                              help="scenes explored at once, each in its own process and world (default 1)")
     interactive.add_argument("--out", type=Path, default=Path("runs/eval-interactive"),
                              help="results go here; reruns resume")
@@ -54,13 +54,16 @@ def add_command(commands: Commands) -> None:
 
     coverage = evaluations.add_parser("coverage", help="learning-augmented exploration: coverage in 500 steps "
                                                        "(the paper's Table I)")
-    coverage.add_argument("--homes", type=int, default=8, help="homes per size: small, medium, large (default 8)")
+    coverage.add_argument("--homes", type=count_option, default=8,
+                          help="homes per size: small, medium, large (default 8)")
     coverage.add_argument("--methods", default="fbe-near,greedy,lfe,lfe-oracle",
                           help="comma separated (default: all four)")
     coverage.add_argument("--model", type=Path, default=None,
                           help="a trained model (homebot lfe train; default: the one shipped with homebot)")
-    coverage.add_argument("--steps", type=int, default=500, help="step budget of an episode (default 500, the paper's)")
-    coverage.add_argument("--workers", type=int, default=1, help="episodes at once, one process each (default 1)")
+    coverage.add_argument("--steps", type=count_option, default=500,
+                          help="step budget of an episode (default 500, the paper's)")
+    coverage.add_argument("--workers", type=count_option, default=1,
+                          help="episodes at once, one process each (default 1)")
     coverage.add_argument("--out", type=Path, default=Path("runs/eval-coverage"),
                           help="results, table.md and coverage.png go here; reruns resume")
     coverage.set_defaults(handler=_eval_coverage)

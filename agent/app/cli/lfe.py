@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+from agent.app.cli.options import count_option, seed_option
+
 DEFAULT_DATA = Path("runs/lfe-data")
 DEFAULT_TRAIN = Path("runs/lfe-train")
 
@@ -24,21 +26,21 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="homebot lfe", description=__doc__.split("\n\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
     data = commands.add_parser("data", help="labelled partial maps from seeded homes, one shard per home")
-    data.add_argument("--homes", type=int, required=True, help="how many homes (seeds FIRST .. FIRST+N-1)")
-    data.add_argument("--first-seed", type=int, default=0, help="seed of the first home (default 0)")
+    data.add_argument("--homes", type=count_option, required=True, help="how many homes (seeds FIRST .. FIRST+N-1)")
+    data.add_argument("--first-seed", type=seed_option, default=0, help="seed of the first home (default 0)")
     data.add_argument("--out", type=Path, default=DEFAULT_DATA, help=f"shard folder (default {DEFAULT_DATA})")
-    data.add_argument("--workers", type=int, default=1, help="homes explored at once, one process each")
+    data.add_argument("--workers", type=count_option, default=1, help="homes explored at once, one process each")
     train = commands.add_parser("train", help="fit the UNet on the shards; held-out split by home")
     train.add_argument("--data", type=Path, default=DEFAULT_DATA, help=f"shard folder (default {DEFAULT_DATA})")
     train.add_argument("--out", type=Path, default=DEFAULT_TRAIN,
                        help=f"model.pt, history.jsonl and loss.png go here (default {DEFAULT_TRAIN})")
-    train.add_argument("--epochs", type=int, help="epochs (default 6, the paper's)")
+    train.add_argument("--epochs", type=count_option, help="epochs (default 6, the paper's)")
     train.add_argument("--minutes", type=float, help="stop after this long, keeping the best model so far")
     train.add_argument("--device", help="cpu, cuda or auto (default auto: a GPU when there is one)")
-    train.add_argument("--seed", type=int, help="split, initialisation and crops (default 0)")
-    train.add_argument("--steps-per-epoch", type=int, help="optimiser steps per epoch (default 120)")
-    train.add_argument("--batch-size", type=int, help="crops per step (default 16)")
-    train.add_argument("--crop", type=int, help="side of a training crop in cells (default 128)")
+    train.add_argument("--seed", type=seed_option, help="split, initialisation and crops (default 0)")
+    train.add_argument("--steps-per-epoch", type=count_option, help="optimiser steps per epoch (default 120)")
+    train.add_argument("--batch-size", type=count_option, help="crops per step (default 16)")
+    train.add_argument("--crop", type=count_option, help="side of a training crop in cells (default 128)")
     return parser
 
 

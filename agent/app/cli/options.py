@@ -1,17 +1,24 @@
-"""Options several `homebot` commands share, and the settings they load.
+"""Options several `homebot` commands share, the settings they load, and the types of their values.
 
 The commands that run episodes take settings (`--config`, `--set`, `--listen`); those that run a
 suite's episodes in worker processes take the suite, the workers and where the worlds are as well.
+A number an option takes is checked as the command line is parsed (`seed_option`, `count_option`,
+`seconds_option`), so a value no run could use is refused, naming the option, before any world starts.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from agent.app.config import Config, load_config
+from agent.app.config_bounds import MAX_SEED
+from worlds.bus.keys import check_namespace
+from worlds.bus.session import check_endpoint
 
 DEFAULT_AGENT_ENDPOINT = "tcp/127.0.0.1:7450"
 
@@ -45,8 +52,8 @@ def add_suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: s
     """
     add_config_options(parser)
     parser.add_argument("--suite", type=Path, required=True, help="a suite file (homebot suite make)")
-    parser.add_argument("--workers", type=int, default=2, help="parallel episodes, each with its own world")
-    parser.add_argument("--limit", type=int, default=None, help="only the first N scenarios")
+    parser.add_argument("--workers", type=count_option, default=2, help="parallel episodes, each with its own world")
+    parser.add_argument("--limit", type=count_option, default=None, help="only the first N scenarios")
     parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} (default {out})")
     parser.add_argument("--worlds", metavar="ENDPOINTS",
                         help="join running worlds instead of starting one per worker: comma-separated "
@@ -74,7 +81,7 @@ def load_settings(args: argparse.Namespace) -> Config:
 def suite_settings(args: argparse.Namespace) -> Config | None:
     """The settings of a suite run (workers need no watcher endpoint), or None after a clear message.
 
-    Also checks ``--workers`` and ``--worlds``, leaving the parsed addresses in
+    Also checks ``--worlds``, leaving the parsed addresses in
     ``args.world_addresses`` (None without ``--worlds``).
 
     Args:
@@ -88,12 +95,112 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
     """
     from agent.app.eval.runner import WorldAddress
 
-    if args.workers < 1:
-        print(f"homebot: --workers must be at least 1, got {args.workers}", file=sys.stderr)
-        return None
     try:
         args.world_addresses = [WorldAddress.parse(w) for w in args.worlds.split(",") if w.strip()] if args.worlds else None
     except ValueError as error:
         print(f"homebot: --worlds: {error}", file=sys.stderr)
         return None
     return load_config(args.config, [*args.set, "bus.listen=[]"])
+
+
+def seed_option(text: str) -> int:
+    """The argparse type of a seed: a whole number a world accepts, 0 to `MAX_SEED`.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The seed.
+
+    Raises:
+        argparse.ArgumentTypeError: not a whole number, or out of that range.
+    """
+    return _whole(text, 0, MAX_SEED, f"is not a seed: seeds lie in 0..{MAX_SEED}")
+
+
+def count_option(text: str) -> int:
+    """The argparse type of how many of something (workers, episodes, homes): 1 or more.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The count.
+
+    Raises:
+        argparse.ArgumentTypeError: not a whole number, or below 1.
+    """
+    return _whole(text, 1, None, "must be at least 1")
+
+
+def seconds_option(text: str) -> float:
+    """The argparse type of a time limit: a finite number of seconds above 0.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The seconds.
+
+    Raises:
+        argparse.ArgumentTypeError: not a number, not finite, or not above 0.
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number of seconds above 0")
+    return value
+
+
+def endpoint_option(text: str) -> str:
+    """The argparse type of a world's or an agent's Zenoh endpoint, e.g. ``tcp/127.0.0.1:7447``.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The endpoint.
+
+    Raises:
+        argparse.ArgumentTypeError: not an endpoint Zenoh can use, saying why.
+    """
+    return _checked(check_endpoint, text)
+
+
+def namespace_option(text: str) -> str:
+    """The argparse type of a world's key prefix, e.g. ``homebot/default``.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The namespace.
+
+    Raises:
+        argparse.ArgumentTypeError: not a namespace, saying why.
+    """
+    return _checked(check_namespace, text)
+
+
+def _whole(text: str, least: int, most: int | None, refusal: str) -> int:
+    """``text`` as a whole number from ``least`` to ``most`` (None: no most), else an error saying
+    ``refusal`` of it; one of more than 40 digits is refused before it is converted."""
+    digits = text.strip().removeprefix("-")
+    if not digits.isdecimal():
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a whole number")
+    if len(digits) > 40:
+        raise argparse.ArgumentTypeError(f"a whole number of {len(digits)} digits is far too large")
+    value = int(text)
+    if value < least or (most is not None and value > most):
+        raise argparse.ArgumentTypeError(f"{value} {refusal}")
+    return value
+
+
+def _checked(check: Callable[[str], str], text: str) -> str:
+    """``check(text)``, its ValueError made the argparse error that names the option."""
+    try:
+        return check(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None

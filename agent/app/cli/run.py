@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, load_settings
+from agent.app.cli.options import (INTERRUPTED, Commands, add_config_options, endpoint_option, load_settings,
+                                   namespace_option, seed_option)
 
 if TYPE_CHECKING:
     from agent.app.runtime.viewer import LiveViewer
@@ -21,12 +22,14 @@ def add_command(commands: Commands) -> None:
     """
     run = commands.add_parser("run", help="run one EQA episode against a simulated home")
     add_config_options(run)
-    run.add_argument("--seed", type=int, help="home and scenario seed (default 0)")
+    run.add_argument("--seed", type=seed_option, help="home and scenario seed (default 0)")
     run.add_argument("--suite", type=Path, help="a suite file (homebot suite make); with --scenario, run one of its "
                                                 "scenarios in its home")
     run.add_argument("--scenario", metavar="ID", help="the id of the suite's scenario to run, e.g. test-0007")
-    run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
-    run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default with --connect)")
+    run.add_argument("--connect", metavar="ENDPOINT", type=endpoint_option,
+                     help="join a running world instead of starting one")
+    run.add_argument("--namespace", type=namespace_option,
+                     help="key prefix of the world to join (default homebot/default with --connect)")
     run.add_argument("--out", type=Path, default=Path("runs"), help="where run folders go (default ./runs)")
     run.add_argument("--method", choices=("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv", "lfe"),
                      help="exploration method (default semantic; same as --set explore.method=…)")
@@ -54,8 +57,11 @@ def shortcut_overrides(args: argparse.Namespace) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from agent.app.runtime.calibrations import stop_calibration
     from agent.app.runtime.episode_bus import EpisodeBus
+    from agent.app.runtime.plugged import PlugError, make_plugged_skills
     from agent.app.runtime.request import RunRequest, new_run_id, process_started_at
+    from agent.eqa.calibration import CalibrationError
 
     started_at = process_started_at()
     try:
@@ -65,6 +71,11 @@ def _run(args: argparse.Namespace) -> int:
         return 2
     args.set.extend(shortcut_overrides(args))
     config = load_settings(args)
+    try:
+        stop_calibration(config)  # a calibration missing, unreadable or made for other settings
+    except CalibrationError as error:
+        print(f"homebot run: {error}", file=sys.stderr)
+        return 2
     request = RunRequest(seed=seed, config=config, out_root=args.out, connect=args.connect,
                          namespace=args.namespace, scenario=scenario, run_id=new_run_id(seed),
                          viewer=_started_viewer(args.viewer), started_at=started_at)
@@ -72,9 +83,14 @@ def _run(args: argparse.Namespace) -> int:
           f"watch with `homebot watch --run {request.run_id}`", flush=True)
     bus = EpisodeBus.open(request)
     try:
+        make_plugged_skills(config.tree, bus.link)  # a skill or port misnamed: no world is started
         bus.start_world()  # now, to come up while the rest of the runtime loads
         from agent.app.runtime.progress import StepPrinter
         from agent.app.runtime.run import RunError, run_episode
+    except PlugError as error:
+        bus.close()
+        print(f"homebot run: {error}", file=sys.stderr)
+        return 2
     except BaseException:
         bus.close()
         raise

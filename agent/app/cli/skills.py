@@ -12,7 +12,8 @@ from typing import Any
 
 from py_trees.common import Status
 
-from agent.app.cli.options import Commands, add_config_options, load_settings
+from agent.app.cli.options import (Commands, add_config_options, endpoint_option, load_settings, namespace_option,
+                                   seconds_option, seed_option)
 from skills.context import SkillContext
 from skills.ports import PortError, PortedSkill
 from skills.registry import SkillError, SkillRegistry
@@ -34,12 +35,14 @@ def add_command(commands: Commands) -> None:
     run.add_argument("name", help="the skill's registered name (see `homebot skills`)")
     run.add_argument("--port", action="append", default=[], metavar="KEY=VALUE",
                      help="bind an input port, e.g. --port look_point=0.4,0,0.8 (repeatable)")
-    run.add_argument("--seed", type=int, default=0, help="the home's seed (default 0)")
+    run.add_argument("--seed", type=seed_option, default=0, help="the home's seed (default 0)")
     run.add_argument("--tabletop", metavar="TASK", help="a tabletop scene of interactive exploration instead "
                      "of a home, e.g. drawer-only")
-    run.add_argument("--connect", metavar="ENDPOINT", help="join a running world instead of starting one")
-    run.add_argument("--namespace", help="key prefix of the world to join (default homebot/default)")
-    run.add_argument("--timeout", type=float, default=120.0, help="seconds the skill may run (default 120)")
+    run.add_argument("--connect", metavar="ENDPOINT", type=endpoint_option,
+                     help="join a running world instead of starting one")
+    run.add_argument("--namespace", type=namespace_option,
+                     help="key prefix of the world to join (default homebot/default)")
+    run.add_argument("--timeout", type=seconds_option, default=120.0, help="seconds the skill may run (default 120)")
     run.add_argument("--json", action="store_true", help="print the outcome as JSON")
     add_config_options(run)
     run.set_defaults(handler=run_skill_command)

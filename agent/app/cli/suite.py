@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import Commands
+from agent.app.cli.options import Commands, count_option, seed_option
 
 
 def add_command(commands: Commands) -> None:
@@ -18,10 +18,10 @@ def add_command(commands: Commands) -> None:
     suite = commands.add_parser("suite", help="make scenario suites")
     suites = suite.add_subparsers(dest="suite", required=True)
     make = suites.add_parser("make", help="write seeded scenarios as JSON lines, split in parts")
-    make.add_argument("--n", type=int, required=True, help="how many scenarios in all")
+    make.add_argument("--n", type=count_option, required=True, help="how many scenarios in all")
     make.add_argument("--split", default=None, help="part sizes adding up to n, e.g. 300/200 (default: one part)")
     make.add_argument("--names", default="calib,test", help="part names, comma separated (default calib,test)")
-    make.add_argument("--seed-base", type=int, default=0, help="first seed; parts take consecutive seeds")
+    make.add_argument("--seed-base", type=seed_option, default=0, help="first seed; parts take consecutive seeds")
     make.add_argument("--out", type=Path, default=Path("suites"), help="output folder (default ./suites)")
     make.add_argument("--hidden", choices=("any", "only", "never"), default="any",
                       help="hidden-evidence questions: mixed in (default), only those, or none")

@@ -21,7 +21,7 @@ from agent.eqa.calibration import Calibration, CalibrationEpisode, CalibrationEr
 from agent.app.runtime.calibrations import made_with, mismatches, write_calibration
 from agent.app.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
 from agent.app.runtime.record import write_json_atomic
-from worlds.suite import read_suite
+from worlds.suite import checked_entries
 
 FULL_BUDGET = "stop.rule=budget"  # calibration and evaluation episodes never stop early
 
@@ -36,10 +36,14 @@ def full_budget_jobs(suite: Path, config: Config, limit: int | None = None) -> l
 
     Returns:
         The jobs.
+
+    Raises:
+        worlds.suite.SuiteError: the suite holds no scenario, a bad line, a repeated id, or a
+            scenario whose home does not match (`worlds.suite.checked_entries`).
     """
     method = config.explore.method
     return [Job(entry["id"], method, entry["seed"], entry["scenario"], (FULL_BUDGET,))
-            for entry in read_suite(suite)[:limit]]
+            for entry in checked_entries(suite, limit)]
 
 
 def episodes_path(out: Path) -> Path:

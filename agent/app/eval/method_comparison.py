@@ -14,7 +14,7 @@ from typing import Any
 from agent.app.config import Config
 from agent.app.eval.curves import TAU_GRID, Rates, explore_panels, plot_curves, write_curves_csv
 from agent.app.eval.runner import Job, WorldAddress, results_for, run_jobs, stderr_progress
-from worlds.suite import read_suite
+from worlds.suite import checked_entries
 
 METHODS = ("fbe", "semantic", "semantic-no-lsv", "semantic-no-gsv")
 
@@ -32,11 +32,13 @@ def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job
 
     Raises:
         ValueError: an unknown method.
+        worlds.suite.SuiteError: the suite holds no scenario, a bad line, a repeated id, or a
+            scenario whose home does not match (`worlds.suite.checked_entries`).
     """
     unknown = sorted(set(methods) - set(METHODS))
     if unknown:
         raise ValueError(f"--methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})")
-    entries = read_suite(suite)[:limit]
+    entries = checked_entries(suite, limit)
     return [
         Job(entry["id"], method, entry["seed"], entry["scenario"], (f"explore.method={method}", "stop.rule=budget"))
         for entry in entries

@@ -9,12 +9,14 @@ of a file made with other settings.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 from pathlib import Path
 from typing import Any
 
 from agent.app.config import Config
 from agent.eqa.calibration import Calibration, CalibrationError, differences, read_calibration
+from agent.eqa.stopping import StopRuleName
 from agent.app.runtime.record import write_json_atomic
 
 SHIPPED_DIR = Path(__file__).resolve().parents[2] / "data"
@@ -102,9 +104,13 @@ def calibration_for(config: Config) -> tuple[Calibration, Path]:
         The calibration and its path.
 
     Raises:
-        CalibrationError: none ships for these settings, or it does not fit them.
+        CalibrationError: the file ``stop.calibration`` names is missing, none ships for these
+            settings, or it does not fit them.
     """
     path = Path(config.stop.calibration) if config.stop.calibration else shipped_calibration(config)
+    if config.stop.calibration and not path.is_file():
+        raise CalibrationError(f"stop.calibration: {path}: no such file (make one with `homebot calibrate --suite "
+                               "SUITE --out FILE`, or stop at the budget with --stop budget)")
     if not path.exists() and not config.stop.calibration:
         shipped = ", ".join(sorted(p.name for p in SHIPPED_DIR.glob("calibration-*.json"))) or "none"
         raise CalibrationError(
@@ -112,9 +118,41 @@ def calibration_for(config: Config) -> tuple[Calibration, Path]:
             f"{config.vlm.backend} (shipped: {shipped}). Make one with `homebot calibrate --suite SUITE "
             "--out FILE` and pass --set stop.calibration=FILE, or stop at the budget with --stop budget."
         )
-    calibration = read_calibration(path)
+    calibration = _read(path)
     check_fits(calibration, path, config)
     return calibration, path
+
+
+def _read(path: Path) -> Calibration:
+    """`read_calibration`, once per process for a file unchanged since: `homebot run` checks its
+    calibration before it starts the world and makes its stopping rule from it after."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return read_calibration(path)  # which says why it cannot be read
+    return _read_unchanged(path.resolve(), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=4)
+def _read_unchanged(path: Path, mtime_ns: int, size: int) -> Calibration:
+    return read_calibration(path)
+
+
+def stop_calibration(config: Config) -> tuple[Calibration, Path] | None:
+    """The calibration the run's stopping rule needs, checked against the settings; the conformal
+    rule (``stop.rule=cp``) needs one, the others none. Cheap, so a command checks it before it
+    starts a world.
+
+    Args:
+        config: the settings.
+
+    Returns:
+        The calibration and its path, or None for a rule that needs none.
+
+    Raises:
+        CalibrationError: the calibration is missing, unreadable, or does not fit the settings.
+    """
+    return calibration_for(config) if config.stop.rule == StopRuleName.CP else None
 
 
 def check_fits(calibration: Calibration, path: Path, config: Config) -> None:
