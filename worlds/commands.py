@@ -185,7 +185,7 @@ def _parse_scenario(data: Any) -> Scenario:
         raise RequestError(f"{where}.target: expected an object")
     for name, value in target.items():
         if name not in TARGET_SLOTS:
-            raise RequestError(f"{where}.target.{_show(name)}: unknown slot (expected {', '.join(TARGET_SLOTS)})")
+            raise RequestError(f"{where}.target.{name[:40]}: unknown slot (expected {', '.join(TARGET_SLOTS)})")
         if value is not None and not isinstance(value, str):
             raise RequestError(f"{where}.target.{name}: expected a word or null, got {_show(value)}")
     return Scenario.from_dict({**data, "start_pose": [float(v) for v in pose],

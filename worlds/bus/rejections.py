@@ -111,6 +111,6 @@ class RejectionLog:
 
     def _write_count(self) -> None:
         held = self._clock() - (self._since if self._since is not None else self._clock())
-        self._log.warning("%d more refused requests not logged in the last %.1f s (at most %g lines a second)",
+        self._log.info("%d more refused requests not logged in the last %.1f s (at most %g lines a second)",
                           self._suppressed, held, self._per_second)
         self._suppressed, self._since = 0, None
