@@ -29,8 +29,11 @@ from worlds.bus.questions import LETTERS
 MAX_WAYPOINTS = 500
 #: Waypoints further than this from the origin are certainly a mistake (homes are ~10 m across).
 MAX_COORDINATE_M = 1000.0
-#: Headings (a move's final yaw, a start pose's) in radians lie within ±this.
-MAX_YAW = 2 * math.pi
+#: Headings (a move's final yaw, a start pose's) in radians lie within ±this: any heading, turned
+#: by another half or whole turn as callers do (a facing plus pi).
+MAX_YAW = 4 * math.pi
+#: How far a start pose's disc may reach into an obstacle: rounding, not overlap.
+START_SLACK_M = 0.005
 MAX_SEED = 2**63 - 1
 #: The most steps a scenario may grant (a home's own budget is 3·sqrt(area), a few dozen).
 MAX_BUDGET = 10_000
@@ -179,7 +182,7 @@ def _parse_scenario(data: Any) -> Scenario:
         raise RequestError(f"{where}.start_pose: expected [x, y, yaw] of finite numbers")
     if any(abs(v) > MAX_COORDINATE_M for v in pose[:2]) or abs(pose[2]) > MAX_YAW:
         raise RequestError(f"{where}.start_pose: {_show(pose)} must have x and y within ±{MAX_COORDINATE_M:g} m "
-                           f"and yaw within ±2π")
+                           f"and yaw within ±4π")
     target = data["target"]
     if not isinstance(target, dict):
         raise RequestError(f"{where}.target: expected an object")
@@ -209,7 +212,7 @@ def check_start_pose(home: HomeSpec, pose: tuple[float, float, float]) -> None:
         bounds = ", ".join(f"{v:g}" for v in home.bounds)
         raise RequestError(f"{where}: ({x:g}, {y:g}) is in none of the home's rooms (its bounds: [{bounds}])")
     gap = clearance(home, x, y)
-    if gap < ROBOT_RADIUS:
+    if gap < ROBOT_RADIUS - START_SLACK_M:
         raise RequestError(f"{where}: ({x:g}, {y:g}) is {gap:.2f} m from a wall, furniture or floor object; "
                            f"the robot needs {ROBOT_RADIUS:g} m of free space around it")
 
@@ -274,7 +277,7 @@ def parse_move_base(meta: dict[str, Any]) -> tuple[list[tuple[float, float]], fl
         waypoints.append((float(point[0]), float(point[1])))
     yaw = meta.get("yaw")
     if yaw is not None and not (_is_number(yaw) and abs(yaw) <= MAX_YAW):
-        raise RequestError(f"move_base.yaw: expected a finite number of radians within ±2π or null, got {_show(yaw)}")
+        raise RequestError(f"move_base.yaw: expected a finite number of radians within ±4π or null, got {_show(yaw)}")
     return waypoints, None if yaw is None else float(yaw)
 
 
