@@ -65,13 +65,16 @@ def classify(reply_payload: bytes | None) -> tuple[str, str]:
 
 
 def _rss_mib(pid: int) -> dict[str, float]:
-    """The process's resident memory now and at its peak (Linux /proc), in MiB."""
+    """The process's resident memory now, at its peak, and its own part: without the files and shared
+    memory it maps (Zenoh maps a same-host peer's shared-memory pool once it sends large messages),
+    from Linux's /proc, in MiB."""
     fields = {}
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
         name, _, value = line.partition(":")
-        if name in ("VmRSS", "VmHWM"):
+        if name in ("VmRSS", "VmHWM", "RssAnon"):
             fields[name] = int(value.split()[0]) / 1024
-    return {"rss_mib": round(fields.get("VmRSS", 0.0), 1), "peak_mib": round(fields.get("VmHWM", 0.0), 1)}
+    return {"rss_mib": round(fields.get("VmRSS", 0.0), 1), "peak_mib": round(fields.get("VmHWM", 0.0), 1),
+            "anon_mib": round(fields.get("RssAnon", 0.0), 1)}
 
 
 def _send(session: zenoh.Session, key: str, payload: bytes, timeout_s: float) -> bytes | None:
@@ -168,6 +171,10 @@ def _run(session: zenoh.Session, link: WorldLink, keys: Keys, world: WorldProces
     }
 
 
+def _growth(before: dict[str, float], after: dict[str, float], key: str) -> str:
+    return f"{100 * (after[key] - before[key]) / max(before[key], 1e-9):+.1f} %"
+
+
 def _healthy(link: WorldLink) -> bool:
     try:
         return link.call("arm_state", {}).meta.get("ok") is True
@@ -193,12 +200,14 @@ def format_fuzz_report(report: dict[str, Any]) -> str:
     lines.append(f"{'all':<16}{report['sent']:>10}" + "".join(f"{totals[o]:>10}" for o in OUTCOMES))
     first, last = report["memory"][0], report["memory"][-1]
     warm = report["memory"][1] if len(report["memory"]) > 1 else first
-    growth = 100 * (last["rss_mib"] - warm["rss_mib"]) / max(warm["rss_mib"], 1e-9)
     log = report["log"]
     lines += [
         f"crashes {report['crashes']}, hangs {report['hangs']}, failed health checks {report['failed_health_checks']}",
-        f"world RSS: {first['rss_mib']:.0f} MiB before, {warm['rss_mib']:.0f} MiB after {warm['sent']} requests, "
-        f"{last['rss_mib']:.0f} MiB after {last['sent']} ({growth:+.1f} %), peak {last['peak_mib']:.0f} MiB",
+        *(f"world {what}: {first[key]:.0f} MiB before, {warm[key]:.0f} MiB after {warm['sent']} requests, "
+          f"{last[key]:.0f} MiB after {last['sent']} ({_growth(first, last, key)} from before, "
+          f"{_growth(warm, last, key)} from {warm['sent']})"
+          for what, key in (("RSS", "rss_mib"), ("own memory (RSS less mapped files and shared memory)", "anon_mib"))),
+        f"world peak RSS {last['peak_mib']:.0f} MiB",
         f"world log: {log['bytes'] / 1024:.0f} KiB, {log['lines']} lines, {log['tracebacks']} tracebacks, "
         f"{log['rejection_lines']} refusals logged, {log['rejections_counted_not_logged']} counted without a line",
     ]

@@ -184,8 +184,8 @@ class Catalogue:
             ("extra", 1),
         ])
         scenario[name] = value
-        if self._rng.random() < 0.1:
-            del scenario[self._rng.choice(sorted(scenario))]
+        if self._rng.random() < 0.1:  # and another field left out
+            del scenario[self._rng.choice(sorted(set(scenario) - {name}))]
         return "reset", _with_token({"seed": 0, "scenario": scenario}, "0")
 
     def _bad_scene(self) -> tuple[str, bytes]:
