@@ -22,7 +22,7 @@ from worlds.bus.codec import MAGIC, Message, decode, encode
 from worlds.bus.keys import Keys
 from worlds.bus.liveness import LivenessWatch
 from worlds.bus.rejections import RejectionLog
-from worlds.bus.rpc import PendingReply, QueryFailed, call
+from worlds.bus.rpc import CommandServer, PendingReply, QueryFailed, call
 from worlds.bus.session import free_tcp_endpoint, open_session
 from worlds.home import generate_home
 from worlds.robot import CameraConfig
@@ -198,6 +198,50 @@ def test_refusals_are_one_line_each_rate_limited_and_all_counted(world: World,
     assert counted == sent
     assert len(lines) < sent  # held back beyond the rate
     assert all(r.exc_info is None and "\n" not in r.getMessage() for r in records)
+
+
+def test_a_request_beyond_the_queue_is_answered_busy_at_once() -> None:
+    """While a command runs and the queue holds as many as it may, one more is told ``busy`` at
+    once; the ones held are answered when the command is done."""
+    endpoint = free_tcp_endpoint()
+    server_session, client = open_session(listen=[endpoint]), open_session(connect=[endpoint])
+    entered, release, stop = threading.Event(), threading.Event(), threading.Event()
+
+    def slow(_: Message) -> tuple[dict, dict]:
+        entered.set()
+        release.wait(30.0)
+        return {}, {}
+
+    server = CommandServer(server_session, "test/busy", max_waiting=1)
+    server.add("test/busy/cmd", slow)
+    thread = threading.Thread(target=server.serve, args=(stop,), daemon=True)
+    thread.start()
+    try:
+        time.sleep(0.3)  # the queryable's declaration reaches the client
+        first = PendingReply(client, "test/busy/cmd", timeout_s=30.0)
+        assert entered.wait(30.0)
+        held = [PendingReply(client, "test/busy/cmd", timeout_s=30.0) for _ in range(2)]
+        refused: list[str] = []
+        deadline = time.monotonic() + 30.0
+        while not refused and time.monotonic() < deadline:  # before the command is done
+            for pending in list(held):
+                try:
+                    pending.poll()
+                except QueryFailed as error:
+                    refused.append(str(error))
+                    held.remove(pending)
+            time.sleep(0.01)
+        assert refused == ["test/busy/cmd: busy: the world's queue is full (1 waiting); try again later"]
+        release.set()
+        assert first.wait().meta == {"ok": True, "namespace": "test/busy"}
+        assert [pending.wait().meta["ok"] for pending in held] == [True]
+    finally:
+        release.set()
+        stop.set()
+        thread.join(10.0)
+        server.close()
+        client.close()
+        server_session.close()
 
 
 def test_the_rejection_log_writes_a_few_lines_a_second_and_one_traceback_per_place(

@@ -121,7 +121,7 @@ class CommandServer:
         try:
             waiting.put_nowait((query, key, handler))
         except queue.Full:
-            reason = f"busy: {self._max_waiting} requests are already waiting for this world; try again later"
+            reason = f"busy: the world's queue is full ({self._max_waiting} waiting); try again later"
             self.rejections.rejected(key, reason)
             self._reply(query, key, self._refusal(reason))
 
