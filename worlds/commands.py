@@ -37,6 +37,8 @@ START_SLACK_M = 0.005
 MAX_SEED = 2**63 - 1
 #: The most steps a scenario may grant (a home's own budget is 3·sqrt(area), a few dozen).
 MAX_BUDGET = 10_000
+#: The longest text of a scenario (its question, a choice, its kind).
+MAX_TEXT = 1000
 #: The slots a scenario's target may name, each a word or null.
 TARGET_SLOTS = ("category", "colour", "room", "container", "appliance")
 #: The most problems of a scene one error reply lists (the rest are counted).
@@ -166,11 +168,11 @@ def _parse_scenario(data: Any) -> Scenario:
         name = mismatched[0]
         raise RequestError(f"{where}.{name}: {'missing' if name in expected else 'unknown field'}")
     for name in ("question", "answer_text", "kind", "asks"):
-        if not isinstance(data[name], str):
-            raise RequestError(f"{where}.{name}: expected a string")
+        if not isinstance(data[name], str) or len(data[name]) > MAX_TEXT:
+            raise RequestError(f"{where}.{name}: expected a string of at most {MAX_TEXT} characters")
     if not (isinstance(data["choices"], list) and len(data["choices"]) == 4
-            and all(isinstance(c, str) for c in data["choices"])):
-        raise RequestError(f"{where}.choices: expected four strings")
+            and all(isinstance(c, str) and len(c) <= MAX_TEXT for c in data["choices"])):
+        raise RequestError(f"{where}.choices: expected four strings of at most {MAX_TEXT} characters")
     if data["answer"] not in LETTERS or data["choices"][LETTERS.index(data["answer"])] != data["answer_text"]:
         raise RequestError(f"{where}.answer: must be a letter A-D naming the choice equal to answer_text")
     for name, most in (("seed", MAX_SEED), ("budget", MAX_BUDGET)):
@@ -189,7 +191,7 @@ def _parse_scenario(data: Any) -> Scenario:
     for name, value in target.items():
         if name not in TARGET_SLOTS:
             raise RequestError(f"{where}.target.{name[:40]}: unknown slot (expected {', '.join(TARGET_SLOTS)})")
-        if value is not None and not isinstance(value, str):
+        if value is not None and not (isinstance(value, str) and len(value) <= MAX_TEXT):
             raise RequestError(f"{where}.target.{name}: expected a word or null, got {_show(value)}")
     return Scenario.from_dict({**data, "start_pose": [float(v) for v in pose],
                                "target": {name: target.get(name) for name in TARGET_SLOTS}})
