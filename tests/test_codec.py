@@ -295,3 +295,54 @@ def test_decoded_arrays_do_not_alias_the_buffer() -> None:
     array = decode(buffer).arrays["x"]
     buffer[-4:] = b"\xff\xff\xff\xff"
     np.testing.assert_array_equal(array, np.arange(4))
+
+
+# --- bounds a hostile sender cannot push past --------------------------------------------------
+
+
+@pytest.mark.parametrize("depth", [65, 1_000, 30_000])
+@pytest.mark.parametrize("opener, closer", [(b"[", b"]"), (b'{"a":', b"}")], ids=["lists", "objects"])
+def test_rejects_nesting_deeper_than_64_levels(depth: int, opener: bytes, closer: bytes) -> None:
+    with pytest.raises(WireError, match=r"^header: nested deeper than 64 levels"):
+        decode(raw_message(b'{"x":' + opener * (depth - 1) + b"1" + closer * (depth - 1) + b"}"))
+
+
+def test_accepts_nesting_of_64_levels_and_brackets_inside_strings() -> None:
+    deep = b'{"x":' + b"[" * 63 + b"1" + b"]" * 63 + b"}"
+    value = decode(raw_message(deep)).meta["x"]
+    for _ in range(63):
+        (value,) = value
+    assert value == 1
+    text = "[" * 500 + '\\"' + "{" * 500
+    assert decode(raw_message({"text": text})).meta == {"text": text}
+
+
+@pytest.mark.parametrize("digits", [21, 400, 4_301, 5_000, 100_000])
+@pytest.mark.parametrize("sign", ["", "-"])
+def test_rejects_integers_beyond_64_bits_naming_their_field(digits: int, sign: str) -> None:
+    header = b'{"path": [[1.0, ' + sign.encode() + b"9" * digits + b"]], \"arrays\": []}"
+    with pytest.raises(WireError, match=rf"^header\.path\[0\]\[1\]: the integer .*\({digits} digits\) is outside the "
+                                        r"64-bit range") as caught:
+        decode(raw_message(header))
+    assert (caught.value.field, caught.value.problem.split(" ")[0]) == ("path[0][1]", "the")
+
+
+def test_keeps_the_whole_64_bit_range() -> None:
+    meta = {"low": -(2**63), "high": 2**64 - 1, "seed": 2**63 - 1}
+    assert decode(encode(meta)).meta == meta
+    with pytest.raises(WireError, match=r"^header\.high: the integer 18446744073709551616 \(20 digits\)"):
+        decode(encode({"high": 2**64}))
+
+
+def test_an_oversized_integer_in_the_array_table_is_the_table_s_fault() -> None:
+    with pytest.raises(WireError, match=r"^header\.arrays\[0\]\.shape\[0\]: the integer") as caught:
+        decode(raw_message(b'{"arrays": [{"name": "x", "dtype": "uint8", "shape": [' + b"9" * 30 + b"]}]}"))
+    assert caught.value.field == ""  # not a metadata field: a server does not name it after its command
+
+
+@pytest.mark.parametrize("byte", [2, 255])
+def test_rejects_bool_bytes_other_than_0_and_1(byte: int) -> None:
+    with pytest.raises(WireError, match=rf"^arrays\.flags: a bool element is one byte, 0 or 1; found {byte}"):
+        decode(raw_message(one_array("bool", [3], "flags"), bytes([1, byte, 0])))
+    assert decode(raw_message(one_array("bool", [3], "flags"), b"\x01\x00\x01")).arrays["flags"].tolist() == [
+        True, False, True]

@@ -49,7 +49,7 @@ def serve(bus: Bus) -> Iterator[Callable[[dict[str, Callable[[Message], tuple[di
     servers: list[CommandServer] = []
 
     def start(handlers: dict[str, Callable[[Message], tuple[dict[str, Any], dict]]]) -> CommandServer:
-        server = CommandServer(bus.server_session)
+        server = CommandServer(bus.server_session, bus.namespace)
         for key, handler in handlers.items():
             server.add(key, handler)
         thread = threading.Thread(target=server.serve, args=(stop,), daemon=True)
@@ -83,7 +83,7 @@ def test_reply_arrives_through_poll(bus: Bus, serve: Any) -> None:
         message = pending.poll()
         time.sleep(0.001)
     assert message is not None, "no reply within 5 s"
-    assert message.meta == {"ok": True, "echo": {"n": 1}}
+    assert message.meta == {"ok": True, "echo": {"n": 1}, "namespace": bus.namespace}
     np.testing.assert_array_equal(message.arrays["v"], [0, 2, 4])
 
 
@@ -115,7 +115,8 @@ def test_request_error_reaches_client_and_server_keeps_serving(bus: Bus, serve: 
     serve({key: handler})
     with pytest.raises(QueryFailed, match=r"move_base: target \(9, 9\) is inside a wall"):
         call(bus.client_session, key, {"bad": True}, timeout_s=5)
-    assert call(bus.client_session, key, {}, timeout_s=5).meta == {"ok": True, "fine": True}
+    reply = call(bus.client_session, key, {}, timeout_s=5)
+    assert reply.meta == {"ok": True, "fine": True, "namespace": bus.namespace}
 
 
 def test_unexpected_exception_is_internal_error_and_server_keeps_serving(bus: Bus, serve: Any) -> None:
@@ -214,7 +215,7 @@ def test_liveness_watch_follows_token_and_gone_fails_pending_query(bus: Bus) -> 
         assert watch.wait_alive(5.0), "the liveliness token was not seen"
         assert watch.gone() is None
         # a queryable that is declared but never served: the query would wait for its deadline
-        server = CommandServer(bus.server_session)
+        server = CommandServer(bus.server_session, bus.namespace)
         server.add(keys.world_cmd("observe"), echo)
         time.sleep(PROPAGATE_S)
         pending = PendingReply(bus.client_session, keys.world_cmd("observe"), timeout_s=60, gone=watch.gone)

@@ -86,7 +86,7 @@ def test_the_worlds_reply_wakes_the_waiting_tree() -> None:
         release.wait(SETTLE_S)
         return {}, {}
 
-    server = CommandServer(world)
+    server = CommandServer(world, keys.namespace)
     server.add(keys.world_cmd("probe"), gated)
     serving = threading.Thread(target=server.serve, args=(stop,), daemon=True)
     serving.start()

@@ -15,7 +15,10 @@ Queryables (all under ``<ns>``, see `worlds.bus.keys`):
 - ``world/robot/description`` {} -> robot size, cameras, URDF, arm joints and limits
 
 and the liveliness token ``world/alive`` while serving. PyBullet lives in the serving thread: the
-`World` is created, used and closed there, and `CommandServer` runs every handler in that thread.
+`World` is created, used and closed there, and `CommandServer` runs every command in that thread,
+one at a time. ``description`` only reads what was fixed before serving began, so it is answered
+from a second thread, also while a long command (a reset, a trajectory) runs. Every reply carries
+the namespace; every request with an array its command does not take is refused.
 """
 
 from __future__ import annotations
@@ -71,6 +74,7 @@ class WorldServer:
         self._record: EpisodeRecord | None = None  # the evaluator's, for the home episode under way
         # the reset done at start and its reply, until another command comes
         self._prepared: tuple[dict[str, Any], tuple[dict[str, Any], Arrays]] | None = None
+        self._described: dict[str, Any] = {}  # the robot's description, fixed before serving begins
 
     def serve(self, stop: threading.Event, seed: int | None = None) -> None:
         """Build the world (reset to ``seed`` if given) and answer commands until ``stop`` is set.
@@ -84,20 +88,18 @@ class WorldServer:
             seed: the home to reset to before the first command, if any.
         """
         self._world = World(self.camera)
-        server = CommandServer(self.session)
+        self._described = robot_description(self.camera)
+        server = CommandServer(self.session, self.keys.namespace)
         token = None
         try:
             if seed is not None:
                 self._prepared = ({"seed": seed}, self._reset(Message({"seed": seed})))
-            server.add(self.keys.world_cmd("reset"), self._reset)
-            for key, handler in ((self.keys.world_cmd("observe"), self._observe),
-                                 (self.keys.world_cmd("move_base"), self._move_base),
-                                 (self.keys.world_cmd("arm_state"), self._arm_state),
-                                 (self.keys.world_cmd("arm_trajectory"), self._arm_trajectory),
-                                 (self.keys.world_cmd("gripper"), self._gripper),
-                                 (self.keys.world_cmd("episode_report"), self._episode_report),
-                                 (self.keys.world_description, self._description)):
-                server.add(key, self._after_prepared(handler))
+            server.add(self.keys.world_cmd("reset"), self._checked("reset", self._reset))
+            for verb, handler in (("observe", self._observe), ("move_base", self._move_base),
+                                  ("arm_state", self._arm_state), ("arm_trajectory", self._arm_trajectory),
+                                  ("gripper", self._gripper), ("episode_report", self._episode_report)):
+                server.add(self.keys.world_cmd(verb), self._checked(verb, self._after_prepared(handler)))
+            server.add(self.keys.world_description, self._checked("description", self._description), concurrent=True)
             token = self.session.liveliness().declare_token(self.keys.world_alive)
             self.ready.set()
             log.info("world serving under %s", self.keys.namespace)
@@ -125,6 +127,14 @@ class WorldServer:
             raise RequestError(f"{verb}: no home yet; send reset first")
         return self._world
 
+    @staticmethod
+    def _checked(verb: str, handler: Handler) -> Handler:
+        """``handler``, after the request's arrays are checked against what ``verb`` takes."""
+        def handle(request: Message) -> tuple[dict[str, Any], Arrays]:
+            commands.check_arrays(verb, request.arrays)
+            return handler(request)
+        return handle
+
     def _after_prepared(self, handler: Handler) -> Handler:
         """``handler``, after which the home built at start no longer answers a reset."""
         def handle(request: Message) -> tuple[dict[str, Any], Arrays]:
@@ -146,6 +156,8 @@ class WorldServer:
             tabletop = {"task": scene.task, "seed": scene.seed, "table": table}
             return {"tabletop": tabletop, "base_pose": list(base_pose)}, {}
         home = wanted.home or generate_home(wanted.seed, wanted.n_rooms)
+        if wanted.scenario is not None:
+            commands.check_start_pose(home, wanted.scenario.start_pose)
         scenario = wanted.scenario or make_scenario(home, wanted.seed)
         try:
             record = EpisodeRecord(home, scenario, self.camera, scenario.start_pose[:2])
@@ -210,8 +222,9 @@ class WorldServer:
         return self._record.report(), {}
 
     def _description(self, request: Message) -> tuple[dict[str, Any], Arrays]:
+        """From the second thread: reads only what `serve` fixed before it began."""
         commands.parse_description(request.meta)
-        return robot_description(self.camera), {}
+        return self._described, {}
 
     def _arm_state(self, request: Message) -> tuple[dict[str, Any], Arrays]:
         commands.parse_arm_state(request.meta)

@@ -19,7 +19,7 @@ from typing import Any
 from worlds.fronts import world_size
 from worlds.home import HomeSpec
 from worlds.spec_checks import check_home
-from worlds.spec_fields import FieldChecker, SpecError
+from worlds.spec_fields import FieldChecker, SpecError, shown
 from worlds.storage import MODELS, PART_KINDS, Box, Part, Slot, StorageModel
 from worlds.things import RELATIONS, Doorway, Furniture, Item, Room, Wall
 from worlds.vocabulary import COLOURS, FURNITURE, OBJECTS, ROOM_TYPES, STORAGE_CATEGORIES, room_kind, room_names
@@ -35,6 +35,23 @@ _JOINTS = {"door": "revolute", "flap": "revolute", "drawer": "prismatic"}
 _EPS = 1e-6
 _HINGES = {"door": ("left", "right"), "flap": ("bottom",), "drawer": (None,)}
 _TOP = ("format", "version", "seed", "rooms", "walls", "doorways", "furniture", "objects")
+#: Bounds of a scene's numbers (metres, radians), far beyond any home: positions, extents of walls,
+#: pieces and boxes, doorway widths, facings, joint limits and states, and free-form attributes.
+MAX_POSITION_M = 1000.0
+MAX_SIZE_M = 100.0
+MAX_DOORWAY_M = 10.0
+MAX_FACING = 2 * math.pi
+MAX_JOINT = 10.0
+MAX_ATTRIBUTE = 1e6
+#: Instance ids travel in int32 segmentation images; seeds are 64-bit.
+MAX_ID = 2**31 - 1
+MAX_SEED = 2**63 - 1
+#: The largest outline (the rectangle around the rooms) a scene may span: with the counts below, what
+#: keeps building a home, drawing its scenario and rasterising its free space to about a second.
+MAX_OUTLINE_M2 = 2000.0
+MAX_ITEMS = {"rooms": 64, "walls": 1024, "doorways": 256, "furniture": 1024, "objects": 4096}
+#: The most parts, slots or panels one storage piece may have.
+MAX_PARTS = 64
 
 
 def _box(box: Box) -> dict[str, Any]:
@@ -141,15 +158,18 @@ class _Reader(FieldChecker):
         if top is None:
             return None
         if top["format"] != FORMAT:
-            self.fail("format", f"{top['format']!r} is not {FORMAT!r}")
-        version = self.integer(top["version"], "version", 0)
+            self.fail("format", f"{shown(top['format'])} is not {FORMAT!r}")
+        version = self.integer(top["version"], "version", 0, MAX_ID)
         if version is not None and version != VERSION:
             self.fail("version", f"{version} is not supported (expected {VERSION})")
         if self.errors:
             return None
-        seed = self.integer(top["seed"], "seed", 0)
+        seed = self.integer(top["seed"], "seed", 0, MAX_SEED)
         sections = {key: self.array(top[key], key) for key in _TOP[3:]}
-        if any(v is None for v in sections.values()):
+        for key, items in sections.items():
+            if items is not None and len(items) > MAX_ITEMS[key]:
+                self.fail(key, f"{len(items)} items, more than the {MAX_ITEMS[key]} a scene may have")
+        if self.errors or any(v is None for v in sections.values()):
             return None
         rooms = [self.room(v, f"rooms[{i}]") for i, v in enumerate(sections["rooms"])]
         walls = [self.wall(v, f"walls[{i}]") for i, v in enumerate(sections["walls"])]
@@ -160,16 +180,28 @@ class _Reader(FieldChecker):
             self.fail("rooms", "a home needs at least one room")
         if self.errors or seed is None:
             return None
+        self.outline(rooms)
+        if self.errors:
+            return None
         home = HomeSpec(seed, tuple(rooms), tuple(doorways), tuple(walls), tuple(furniture), tuple(objects))
         check_home(home, self.fail)
         return home
+
+    def outline(self, rooms: list[Room]) -> None:
+        """Refuse rooms spread over more than `MAX_OUTLINE_M2` (what the world rasterises)."""
+        x0, y0 = min(r.rect[0] for r in rooms), min(r.rect[1] for r in rooms)
+        x1, y1 = max(r.rect[2] for r in rooms), max(r.rect[3] for r in rooms)
+        if (x1 - x0) * (y1 - y0) > MAX_OUTLINE_M2:
+            self.fail("rooms", f"their outline [{x0:g}, {y0:g}, {x1:g}, {y1:g}] spans {(x1 - x0) * (y1 - y0):.0f} m², "
+                               f"more than the {MAX_OUTLINE_M2:g} m² a home may")
 
     def room(self, value: Any, path: str) -> Room | None:
         r = self.record(value, path, ("id", "name", "type", "rect", "floor_colour"))
         if r is None:
             return None
-        fields = (self.integer(r["id"], f"{path}.id", 1), self.word(r["name"], f"{path}.name", room_names()),
-                  self.word(r["type"], f"{path}.type", ROOM_TYPES), self.vector(r["rect"], f"{path}.rect", 4),
+        fields = (self.integer(r["id"], f"{path}.id", 1, MAX_ID), self.word(r["name"], f"{path}.name", room_names()),
+                  self.word(r["type"], f"{path}.type", ROOM_TYPES),
+                  self.vector(r["rect"], f"{path}.rect", 4, MAX_POSITION_M),
                   self.word(r["floor_colour"], f"{path}.floor_colour", COLOURS))
         if any(f is None for f in fields):
             return None
@@ -185,8 +217,9 @@ class _Reader(FieldChecker):
         r = self.record(value, path, ("id", "center", "size"))
         if r is None:
             return None
-        fields = (self.integer(r["id"], f"{path}.id", 1), self.vector(r["center"], f"{path}.center", 3),
-                  self.vector(r["size"], f"{path}.size", 3, positive=True))
+        fields = (self.integer(r["id"], f"{path}.id", 1, MAX_ID),
+                  self.vector(r["center"], f"{path}.center", 3, MAX_POSITION_M),
+                  self.vector(r["size"], f"{path}.size", 3, MAX_SIZE_M, True))
         return None if any(f is None for f in fields) else Wall(*fields)
 
     def doorway(self, value: Any, path: str) -> Doorway | None:
@@ -197,7 +230,8 @@ class _Reader(FieldChecker):
         if names is not None and (len(names) != 2 or not all(isinstance(n, str) for n in names)):
             self.fail(f"{path}.rooms", "expected the names of the two rooms it joins")
             names = None
-        fields = (self.vector(r["center"], f"{path}.center", 2), self.number(r["width"], f"{path}.width", True),
+        fields = (self.vector(r["center"], f"{path}.center", 2, MAX_POSITION_M),
+                  self.number(r["width"], f"{path}.width", MAX_DOORWAY_M, True),
                   self.word(r["along"], f"{path}.along", ("x", "y")))
         if names is None or any(f is None for f in fields):
             return None
@@ -208,10 +242,12 @@ class _Reader(FieldChecker):
         r = self.record(value, path, keys)
         if r is None:
             return None
-        fields = (self.integer(r["id"], f"{path}.id", 1), self.word(r["category"], f"{path}.category", FURNITURE),
+        fields = (self.integer(r["id"], f"{path}.id", 1, MAX_ID),
+                  self.word(r["category"], f"{path}.category", FURNITURE),
                   self.word(r["colour"], f"{path}.colour", COLOURS), self.word(r["room"], f"{path}.room"),
-                  self.vector(r["center"], f"{path}.center", 3), self.vector(r["size"], f"{path}.size", 3, True),
-                  self.number(r["facing"], f"{path}.facing"))
+                  self.vector(r["center"], f"{path}.center", 3, MAX_POSITION_M),
+                  self.vector(r["size"], f"{path}.size", 3, MAX_SIZE_M, True),
+                  self.number(r["facing"], f"{path}.facing", MAX_FACING))
         state = self.words(r["state"], f"{path}.state", STATES)
         storage = None if r["storage"] is None else self.storage(r["storage"], f"{path}.storage")
         if any(f is None for f in fields) or state is None or (r["storage"] is not None and storage is None):
@@ -236,9 +272,15 @@ class _Reader(FieldChecker):
         r = self.record(value, path, ("model", "size", "parts", "slots", "panels"))
         if r is None:
             return None
-        name, size = self.word(r["model"], f"{path}.model", MODELS), self.vector(r["size"], f"{path}.size", 3, True)
+        name = self.word(r["model"], f"{path}.model", MODELS)
+        size = self.vector(r["size"], f"{path}.size", 3, MAX_SIZE_M, True)
         lists = [self.array(r[k], f"{path}.{k}") for k in ("parts", "slots", "panels")]
-        if name is None or size is None or any(v is None for v in lists):
+        for key, items in zip(("parts", "slots", "panels"), lists):
+            if items is not None and not (key != "panels" or items):
+                self.fail(f"{path}.panels", "a piece needs at least one panel")
+            elif items is not None and len(items) > MAX_PARTS:
+                self.fail(f"{path}.{key}", f"{len(items)} items, more than the {MAX_PARTS} a piece may have")
+        if name is None or size is None or any(v is None or len(v) > MAX_PARTS for v in lists) or not lists[2]:
             return None
         read = [self.part(v, f"{path}.parts[{i}]") for i, v in enumerate(lists[0])]
         slots = [self.slot(v, f"{path}.slots[{i}]") for i, v in enumerate(lists[1])]
@@ -246,10 +288,12 @@ class _Reader(FieldChecker):
         if any(v is None for v in (*read, *slots, *panels)):
             return None
         parts = [part for part, _ in read]
-        names = [p.name for p in parts]
-        for i, part_name in enumerate(names):
-            if part_name in names[:i]:
-                self.fail(f"{path}.parts[{i}].name", f"{part_name!r} is used twice")
+        links = {"carcass"}  # each part, each handle and the carcass is a link of the piece's model
+        for i, part in enumerate(parts):
+            for key, link in (("name", part.name), ("handle", part.handle)):
+                if link in links:
+                    self.fail(f"{path}.parts[{i}].{key}", f"{link!r} is used twice (or is the carcass's name)")
+                links.add(link)
         kinds = {p.name: p.kind for p in parts}
         for i, slot in enumerate(slots):
             if slot.part is not None and kinds.get(slot.part) != "drawer":
@@ -266,18 +310,20 @@ class _Reader(FieldChecker):
             return None
         kind = self.word(r["kind"], f"{path}.kind", PART_KINDS)
         joints = set(_JOINTS.values())
-        fields = (self.word(r["name"], f"{path}.name"), kind, self.word(r["joint"], f"{path}.joint", joints),
-                  self.number(r["lower"], f"{path}.lower"), self.number(r["upper"], f"{path}.upper"))
-        handle, front = self.word(r["handle"], f"{path}.handle"), self.vector(r["front"], f"{path}.front", 4)
+        fields = (self.name(r["name"], f"{path}.name"), kind, self.word(r["joint"], f"{path}.joint", joints),
+                  self.number(r["lower"], f"{path}.lower", MAX_JOINT),
+                  self.number(r["upper"], f"{path}.upper", MAX_JOINT))
+        handle = self.name(r["handle"], f"{path}.handle")
+        front = self.vector(r["front"], f"{path}.front", 4, MAX_SIZE_M)
         tray = None if r["tray"] is None else self.box(r["tray"], f"{path}.tray")
-        state = self.number(r["state"], f"{path}.state")
+        state = self.number(r["state"], f"{path}.state", MAX_JOINT)
         if any(f is None for f in (*fields, handle, front, state)) or (r["tray"] is not None and tray is None):
             return None
         name, kind, joint, lower, upper = fields
         if joint != _JOINTS[kind]:
             self.fail(f"{path}.joint", f"a {kind} moves on a {_JOINTS[kind]} joint, not {joint}")
         if r["hinge"] not in _HINGES[kind]:
-            self.fail(f"{path}.hinge", f"{r['hinge']!r} is not a hinge of a {kind} ({_HINGES[kind]})")
+            self.fail(f"{path}.hinge", f"{shown(r['hinge'])} is not a hinge of a {kind} ({_HINGES[kind]})")
         if (tray is None) != (kind != "drawer"):
             self.fail(f"{path}.tray", "a drawer has a tray, doors and flaps have none (null)")
         if lower > upper:
@@ -292,9 +338,10 @@ class _Reader(FieldChecker):
         r = self.record(value, path, ("name", "part", "access", "center", "size"))
         if r is None:
             return None
-        fields = (self.word(r["name"], f"{path}.name"), self.word(r["access"], f"{path}.access"),
-                  self.vector(r["center"], f"{path}.center", 3), self.vector(r["size"], f"{path}.size", 3, True))
-        part = self.optional_word(r["part"], f"{path}.part")
+        fields = (self.name(r["name"], f"{path}.name"), self.name(r["access"], f"{path}.access"),
+                  self.vector(r["center"], f"{path}.center", 3, MAX_POSITION_M),
+                  self.vector(r["size"], f"{path}.size", 3, MAX_SIZE_M, True))
+        part = None if r["part"] is None else self.name(r["part"], f"{path}.part")
         if any(f is None for f in fields) or (r["part"] is not None and part is None):
             return None
         name, access, center, size = fields
@@ -304,8 +351,8 @@ class _Reader(FieldChecker):
         r = self.record(value, path, ("name", "center", "size"))
         if r is None:
             return None
-        fields = (self.word(r["name"], f"{path}.name"), self.vector(r["center"], f"{path}.center", 3),
-                  self.vector(r["size"], f"{path}.size", 3, True))
+        fields = (self.name(r["name"], f"{path}.name"), self.vector(r["center"], f"{path}.center", 3, MAX_POSITION_M),
+                  self.vector(r["size"], f"{path}.size", 3, MAX_SIZE_M, True))
         return None if any(f is None for f in fields) else Box(*fields)
 
     def item(self, value: Any, path: str) -> Item | None:
@@ -313,13 +360,15 @@ class _Reader(FieldChecker):
         r = self.record(value, path, keys)
         if r is None:
             return None
-        fields = (self.integer(r["id"], f"{path}.id", 1), self.word(r["category"], f"{path}.category", OBJECTS),
+        fields = (self.integer(r["id"], f"{path}.id", 1, MAX_ID),
+                  self.word(r["category"], f"{path}.category", OBJECTS),
                   self.word(r["colour"], f"{path}.colour", COLOURS), self.word(r["room"], f"{path}.room"),
-                  self.vector(r["center"], f"{path}.center", 3),
+                  self.vector(r["center"], f"{path}.center", 3, MAX_POSITION_M),
                   self.word(r["relation"], f"{path}.relation", RELATIONS))
-        parent = None if r["parent"] is None else self.integer(r["parent"], f"{path}.parent", 1)
+        parent = None if r["parent"] is None else self.integer(r["parent"], f"{path}.parent", 1, MAX_ID)
         slot = self.optional_word(r["slot"], f"{path}.slot")
-        extra = (self.scalars(r["attributes"], f"{path}.attributes"), self.words(r["state"], f"{path}.state", STATES))
+        extra = (self.scalars(r["attributes"], f"{path}.attributes", MAX_ATTRIBUTE),
+                 self.words(r["state"], f"{path}.state", STATES))
         bad_links = (r["parent"] is not None and parent is None) or (r["slot"] is not None and slot is None)
         if any(f is None for f in (*fields, *extra)) or bad_links:
             return None

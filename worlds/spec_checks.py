@@ -1,10 +1,11 @@
 """The checks of a scene spec that no single field shows: ids, overlaps, containment, relations.
 
 worlds.spec reads every field on its own first; these checks then look at the home as a whole:
-every instance id used once, rooms apart, doorways on the edges of the rooms they join, furniture
-and objects inside their rooms, and every object's parent existing and able to hold it the way
-its relation says (a slot of storage for 'inside' furniture, a container, a cover). Each problem
-goes to ``fail(path, problem)``.
+every instance id used once, rooms apart, doorways on the edges of the rooms they join, walls
+within the outline, furniture and objects inside their rooms, and every object's parent existing
+and able to hold it the way its relation says (a slot of storage for 'inside' furniture, a
+container, a cover). Each problem goes to ``fail(path, problem)``. Every check takes time in
+proportion to the things checked (rooms: to their square, and they are few).
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from worlds.vocabulary import CONTAINERS, COVERS
 
 Fail = Callable[[str, str], None]
 _EPS = 1e-6
+#: How far a wall may reach beyond the outline of the rooms (its thickness, with room to spare).
+WALL_MARGIN_M = 1.0
 
 
 def check_home(home: HomeSpec, fail: Fail) -> None:
@@ -41,6 +44,12 @@ def check_home(home: HomeSpec, fail: Fail) -> None:
             if rects_overlap(room.rect, other.rect):
                 fail(f"rooms[{i}].rect", f"overlaps rooms[{j}] ({other.name!r})")
         rooms[room.name] = room
+    x0, y0, x1, y1 = home.bounds
+    for i, wall in enumerate(home.walls):
+        wx0, wy0, wx1, wy1 = wall.footprint
+        if wx0 < x0 - WALL_MARGIN_M or wy0 < y0 - WALL_MARGIN_M or wx1 > x1 + WALL_MARGIN_M or wy1 > y1 + WALL_MARGIN_M:
+            fail(f"walls[{i}].center", f"the wall reaches beyond the rooms' outline [{x0:g}, {y0:g}, {x1:g}, {y1:g}] "
+                                       f"by more than {WALL_MARGIN_M:g} m")
     for i, door in enumerate(home.doorways):
         for name in door.rooms:
             if name not in rooms:
@@ -94,14 +103,16 @@ def _check_objects(home: HomeSpec, rooms: dict[str, Room], fail: Fail) -> None:
             fail(f"{path}.{problem[0]}", problem[1])
         elif parent.room != item.room:
             fail(f"{path}.room", f"{item.room!r} is not the room of its parent ({parent.room!r})")
+    settled: set[int] = set()  # objects whose chain of parents ends at furniture or nothing
     for i, item in enumerate(home.objects):
-        seen, current = {item.instance_id}, item
-        while current.parent in items:
+        chain, current = {item.instance_id}, item
+        while current.parent in items and current.parent not in settled:
             current = items[current.parent]
-            if current.instance_id in seen:
+            if current.instance_id in chain:
                 fail(f"objects[{i}].parent", "objects contain each other in a cycle")
                 break
-            seen.add(current.instance_id)
+            chain.add(current.instance_id)
+        settled |= chain
 
 
 def _relation_problem(item: Item, parent: Furniture | Item) -> tuple[str, str] | None:

@@ -8,9 +8,10 @@ The header is a JSON object with two reserved keys. ``"arrays"`` lists the array
 order, each as ``{"name": str, "dtype": str, "shape": [int, ...]}``; their bytes are packed back to
 back in C order, little-endian. Every other key is free metadata for the message's kind.
 
-Nothing here is ever unpickled or evaluated: the header is parsed as JSON, checked field by field
-(dtype against an allow-list, shapes against sizes, totals against limits) and only then are the
-array bytes viewed, so a malformed or hostile message is rejected before it can cost memory.
+Nothing here is ever unpickled or evaluated: the header is parsed as JSON within bounds (nesting,
+integers: `worlds.bus.header_json`), checked field by field (dtype against an allow-list, shapes
+against sizes, totals against limits) and only then are the array bytes viewed, so a malformed or
+hostile message is rejected before it can cost memory. A ``bool`` element is one byte, 0 or 1.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from worlds.bus.header_json import HeaderError, parse_header_json
+
 MAGIC = b"HBW1"
 _PREFIX = struct.Struct(">4sI")
 
@@ -34,7 +37,19 @@ ALLOWED_DTYPES: dict[str, np.dtype] = {
 
 
 class WireError(ValueError):
-    """A message that does not follow the wire format; the text says which field and why."""
+    """A message that does not follow the wire format; the text says which field and why.
+
+    Args:
+        message: the text, ``field: problem``.
+        field: when one metadata value is at fault, its path in the header (``path[0][1]``), so a
+            server can name it after its command (``move_base.path[0][1]``); else "".
+        problem: with ``field``, what is wrong with that value.
+    """
+
+    def __init__(self, message: str, field: str = "", problem: str = "") -> None:
+        super().__init__(message)
+        self.field = field
+        self.problem = problem
 
 
 @dataclass(frozen=True)
@@ -122,6 +137,8 @@ def decode(data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS
     offset = 0
     for name, dtype, shape, nbytes in specs:
         raw = np.frombuffer(payload[offset : offset + nbytes], dtype=dtype)
+        if dtype.kind == "b" and raw.view(np.uint8).max(initial=0) > 1:
+            raise WireError(f"arrays.{name}: a bool element is one byte, 0 or 1; found {raw.view(np.uint8).max()}")
         arrays[name] = raw.reshape(shape).astype(dtype.newbyteorder("="), copy=True)
         offset += nbytes
     return Message(meta=header, arrays=arrays)
@@ -129,7 +146,12 @@ def decode(data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS
 
 def _parse_header(raw: bytes) -> dict[str, Any]:
     try:
-        header = json.loads(raw.decode("utf-8"))
+        header = parse_header_json(raw)
+    except HeaderError as error:
+        where = f"header.{error.field}" if error.field else "header"
+        in_table = error.field == "arrays" or error.field.startswith(("arrays[", "arrays."))  # not metadata
+        field = "" if in_table else error.field
+        raise WireError(f"{where}: {error.problem}", field, error.problem if field else "") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise WireError(f"header: not valid UTF-8 JSON ({error})") from None
     if not isinstance(header, dict):

@@ -20,6 +20,7 @@ import numpy as np
 import zenoh
 
 from worlds.bus.codec import DEFAULT_LIMITS, Limits, Message, WireError, decode, encode
+from worlds.bus.rejections import MAX_REASON_CHARS, RejectionLog
 
 log = logging.getLogger(__name__)
 
@@ -40,28 +41,47 @@ class CommandServer:
 
     Handlers run in the serving thread rather than Zenoh's callback threads, so a simulator that is
     not thread-safe (PyBullet) is only ever touched from one thread: Zenoh's callbacks only queue
-    the queries, in the order they came, and the serving thread waits on that queue.
+    the queries, in the order they came, and the serving thread waits on that queue. Handlers added
+    ``concurrent`` (those that only read data that never changes, such as the robot's description)
+    are answered from a second thread meanwhile, so they answer while a long command runs.
+
+    Every reply carries ``namespace`` and comes on the queryable's own key, so a client that asked
+    with a wildcard can tell who answered. A zero-length request is ``{}``, as a request without a
+    payload is. A request whose queue already holds ``max_waiting`` is answered at once with a
+    ``busy`` error rather than held. Refusals are logged one line each, rate-limited
+    (`worlds.bus.rejections`).
 
     Args:
         session: the bus session.
+        namespace: the namespace served, put in every reply.
         limits: the largest request accepted.
+        max_waiting: the most requests held for each thread before it answers them.
     """
 
-    def __init__(self, session: zenoh.Session, limits: Limits = DEFAULT_LIMITS) -> None:
+    def __init__(self, session: zenoh.Session, namespace: str, limits: Limits = DEFAULT_LIMITS,
+                 max_waiting: int = 64) -> None:
         self._session = session
+        self._namespace = namespace
         self._limits = limits
+        self._max_waiting = max_waiting
         self._queryables: list[Any] = []
-        self._waiting: queue.SimpleQueue[tuple[zenoh.Query, Handler]] = queue.SimpleQueue()
+        self._waiting: queue.Queue[tuple[zenoh.Query, str, Handler]] = queue.Queue(max_waiting)
+        self._concurrent: queue.Queue[tuple[zenoh.Query, str, Handler]] = queue.Queue(max_waiting)
+        self.rejections = RejectionLog(log)
+        self._stopping = threading.Event()  # the commands' thread is done: the second one stops too
 
-    def add(self, key: str, handler: Handler) -> None:
+    def add(self, key: str, handler: Handler, concurrent: bool = False) -> None:
         """Answer queries on ``key`` with ``handler``.
 
         Args:
-            key: the key expression.
+            key: the key expression; its last chunk names the command in errors (``move_base.yaw``).
             handler: makes the reply from the query's message.
+            concurrent: answer from the second thread, beside the commands: only for a handler that
+                reads nothing any other handler changes.
         """
+        waiting = self._concurrent if concurrent else self._waiting
         self._queryables.append(self._session.declare_queryable(
-            key, zenoh.handlers.Callback(lambda query: self._waiting.put((query, handler)))))
+            key, zenoh.handlers.Callback(lambda query: self._hold(waiting, query, key, handler))))
 
     def serve(self, stop: threading.Event, check_s: float = 0.05) -> None:
         """Answer queries as they come until ``stop`` is set.
@@ -70,32 +90,68 @@ class CommandServer:
             stop: set to stop serving.
             check_s: the longest it waits for a query before looking at ``stop`` again.
         """
-        while not stop.is_set():
-            try:
-                query, handler = self._waiting.get(timeout=check_s)
-            except queue.Empty:
-                continue
-            self._answer(query, handler)
+        self._stopping.clear()
+        beside = threading.Thread(target=self._serve, args=(self._concurrent, stop, check_s),
+                                  name="command-server-concurrent", daemon=True)
+        beside.start()
+        try:
+            self._serve(self._waiting, stop, check_s)
+        finally:
+            self._stopping.set()
+            beside.join()
 
     def close(self) -> None:
         for queryable in self._queryables:
             queryable.undeclare()
         self._queryables.clear()
 
-    def _answer(self, query: zenoh.Query, handler: Handler) -> None:
-        key = str(query.key_expr)
+    def _serve(self, waiting: queue.Queue[tuple[zenoh.Query, str, Handler]], stop: threading.Event,
+               check_s: float) -> None:
+        while not (stop.is_set() or self._stopping.is_set()):
+            try:
+                query, key, handler = waiting.get(timeout=check_s)
+            except queue.Empty:
+                self.rejections.flush()
+                continue
+            self._answer(query, key, handler)
+
+    def _hold(self, waiting: queue.Queue[tuple[zenoh.Query, str, Handler]], query: zenoh.Query, key: str,
+              handler: Handler) -> None:
+        """In Zenoh's thread: queue the query, or answer it busy when its queue is full."""
         try:
-            raw = query.payload.to_bytes() if query.payload is not None else encode({})
-            meta, arrays = handler(decode(raw, self._limits))
-            reply = encode({"ok": True, **meta}, arrays)
+            waiting.put_nowait((query, key, handler))
+        except queue.Full:
+            reason = f"busy: the world's queue is full ({self._max_waiting} waiting); try again later"
+            self.rejections.rejected(key, reason)
+            self._reply(query, key, self._refusal(reason))
+
+    def _answer(self, query: zenoh.Query, key: str, handler: Handler) -> None:
+        verb = key.rsplit("/", 1)[-1]
+        try:
+            raw = query.payload.to_bytes() if query.payload is not None else b""
+            meta, arrays = handler(decode(raw, self._limits) if raw else Message())
+            reply = encode({"ok": True, **meta, "namespace": self._namespace}, arrays)
         except (WireError, RequestError) as error:
-            log.info("rejected %s: %s", key, error)
-            reply = encode({"ok": False, "error": str(error)})
+            named = isinstance(error, WireError) and error.field
+            reason = f"{verb}.{error.field}: {error.problem}" if named else str(error)
+            self.rejections.rejected(key, reason)
+            reply = self._refusal(reason)
         except Exception as error:  # a bug must not take the server down; the client is told
-            log.exception("handler for %s raised", key)
-            reply = encode({"ok": False, "error": f"internal error: {type(error).__name__}: {error}"})
-        query.reply(query.key_expr, reply)
-        query.drop()
+            self.rejections.failed(key, error)
+            reply = self._refusal(f"internal error: {type(error).__name__}: {str(error)[:MAX_REASON_CHARS]}")
+        self._reply(query, key, reply)
+
+    def _refusal(self, reason: str) -> bytes:
+        return encode({"ok": False, "error": reason, "namespace": self._namespace})
+
+    @staticmethod
+    def _reply(query: zenoh.Query, key: str, payload: bytes) -> None:
+        try:
+            query.reply(key, payload)
+        except zenoh.ZError as error:  # the client went away meanwhile: nobody to tell
+            log.debug("no reply on %s: %s", key, error)
+        finally:
+            query.drop()
 
 
 class PendingReply:

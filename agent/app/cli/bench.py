@@ -1,4 +1,5 @@
-"""`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world."""
+"""`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world; the
+world's answers to malformed requests (fuzz)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, loa
 
 
 def add_command(commands: Commands) -> None:
-    """Add ``bench`` and its four benchmarks with their options.
+    """Add ``bench`` and its benchmarks with their options.
 
     Args:
         commands: the `homebot` parser's commands.
@@ -43,6 +44,35 @@ def add_command(commands: Commands) -> None:
     world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
     world.add_argument("--json", action="store_true", help="print the figures as JSON")
     world.set_defaults(handler=_bench_world)
+    fuzz = benches.add_parser("fuzz", help="malformed requests to a world started for it: how each is refused, "
+                                           "crashes, hangs, the world's memory and log")
+    fuzz.add_argument("--messages", type=int, default=100_000, help="malformed requests to send (default 100000)")
+    fuzz.add_argument("--seed", type=int, default=0, help="the requests' seed (default 0)")
+    fuzz.add_argument("--json", action="store_true", help="print the figures as JSON")
+    fuzz.set_defaults(handler=_bench_fuzz)
+
+
+def _bench_fuzz(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump
+    from agent.app.bench.fuzz import bench_fuzz, format_fuzz_report
+    from agent.app.runtime.world_process import WorldStartError
+
+    if args.messages < 1:
+        print(f"homebot bench fuzz: --messages must be at least 1, got {args.messages}", file=sys.stderr)
+        return 2
+    if args.seed < 0:
+        print(f"homebot bench fuzz: --seed {args.seed} must not be negative", file=sys.stderr)
+        return 2
+    try:
+        report = bench_fuzz(args.messages, args.seed, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    except WorldStartError as error:
+        print(f"homebot bench fuzz: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("homebot bench fuzz: interrupted", file=sys.stderr)
+        return INTERRUPTED
+    print(dump(report) if args.json else format_fuzz_report(report))
+    return 0 if report["crashes"] == 0 and report["hangs"] == 0 else 1
 
 
 def _bench_world(args: argparse.Namespace) -> int:

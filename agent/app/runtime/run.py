@@ -211,7 +211,7 @@ def _episode_report(link: WorldLink, timeout_s: float) -> dict[str, Any] | None:
     except QueryFailed as error:
         log.warning("no evaluator's report of the episode: %s", error)
         return None
-    return {key: value for key, value in reply.items() if key != "ok"}
+    return {key: value for key, value in reply.items() if key not in ("ok", "namespace")}
 
 
 def _stopping_rule(config: Config) -> tuple[StoppingRule, dict[str, Any]]:
