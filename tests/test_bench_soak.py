@@ -69,7 +69,8 @@ def test_a_short_soak_reports_every_lane_no_failures_no_crosstalk_and_memory(
     assert len({lane["endpoint"] for lane in report["lanes"]}) == 2
     processes = report["memory"]["processes"]
     assert sorted(processes) == ["agent-0", "agent-1", "world-0", "world-1"]
-    assert all(row["first_mb"] > 0 and row["last_mb"] > 0 and row["growth"] is not None for row in processes.values())
+    assert all(row["first_mb"] > 0 and row["last_mb"] > 0 and row["growth"] is not None and row["late_growth"] == 0.0
+               for row in processes.values())  # one episode each: first, middle and last are the same
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     kinds = [line["kind"] for line in lines]
     assert kinds.count("episode") == report["episodes"] and kinds[-1] == "report"

@@ -234,6 +234,8 @@ def _gather(state: _Soak, inbox: Any, agents: list[Any], worlds: list[WorldProce
             line = None
         if line is not None and line["kind"] == "done":
             done.add(line["lane"])
+            agents[line["lane"]].join(10.0)  # reaped, so that no sample reads a finished process
+            state.pids[f"agent-{line['lane']}"] = None
         elif line is not None:
             state.episode(line)
         if time.monotonic() >= next_sample:
@@ -261,17 +263,22 @@ def _lane_row(lane: Lane, episodes: list[dict[str, Any]]) -> dict[str, Any]:
 
 def _memory_rows(samples: list[dict[str, Any]], episodes: list[dict[str, Any]], runs: int
                  ) -> dict[str, dict[str, Any]]:
-    """Per process: resident memory after its lane's first episode and after its last, the most
-    seen (episode ends and timed samples), and the growth from first to last (a fraction)."""
+    """Per process: resident memory after its lane's first episode, its middle one and its last, the
+    most seen (episode ends and timed samples), the growth from first to last and from the middle
+    to the last (fractions: the second says whether it is still growing once warm)."""
     rows = {}
     for kind, index in ((kind, index) for kind in ("agent", "world") for index in range(runs)):
         name = f"{kind}-{index}"
         after = [e[f"{kind}_rss_mb"] for e in episodes if e["lane"] == index and e.get(f"{kind}_rss_mb") is not None]
         seen = after + [s["rss_mb"][name] for s in samples if s["rss_mb"].get(name) is not None]
-        first, last = (after[0], after[-1]) if after else (None, None)
-        rows[name] = {"first_mb": first, "last_mb": last, "max_mb": max(seen) if seen else None,
-                      "episodes": len(after), "growth": round(last / first - 1.0, 4) if first and last else None}
+        first, middle, last = (after[0], after[len(after) // 2], after[-1]) if after else (None, None, None)
+        rows[name] = {"first_mb": first, "middle_mb": middle, "last_mb": last, "max_mb": max(seen) if seen else None,
+                      "episodes": len(after), "growth": _growth(first, last), "late_growth": _growth(middle, last)}
     return rows
+
+
+def _growth(before: float | None, after: float | None) -> float | None:
+    return round(after / before - 1.0, 4) if before and after else None
 
 
 def _rounded(mb: float | None) -> float | None:
@@ -302,12 +309,12 @@ def format_soak_report(report: dict[str, Any]) -> str:
         lines.append(f"{lane['lane']:>4}  {lane['namespace']:<16} {lane['endpoint']:<22} {lane['episodes']:>8} "
                      f"{lane['failures']:>8} {per:>9}")
     memory = report["memory"]
-    lines.append(f"memory (MB)  {'first':>7} {'last':>7} {'max':>7} {'growth':>7}  (after the lane's first and "
-                 "last episode)")
+    lines.append(f"memory (MB)  {'first':>7} {'middle':>7} {'last':>7} {'max':>7} {'growth':>7} {'late':>7}  "
+                 "(after the lane's first, middle and last episode; growth first→last, late middle→last)")
     for name, row in memory["processes"].items():
-        cells = [_cell(row[key]) for key in ("first_mb", "last_mb", "max_mb")]
-        growth = "-" if row["growth"] is None else f"{100 * row['growth']:+.1f}%"
-        lines.append(f"{name:<12} " + " ".join(f"{cell:>7}" for cell in cells) + f" {growth:>7}")
+        cells = [_cell(row[key]) for key in ("first_mb", "middle_mb", "last_mb", "max_mb")]
+        cells += ["-" if row[key] is None else f"{100 * row[key]:+.1f}%" for key in ("growth", "late_growth")]
+        lines.append(f"{name:<12} " + " ".join(f"{cell:>7}" for cell in cells))
     samples = memory["samples"]
     lines.append("samples (MB) at minute " + " ".join(f"{s['t_min']:>6.1f}" for s in samples))
     for name in memory["processes"]:
