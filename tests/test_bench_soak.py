@@ -45,7 +45,8 @@ def test_each_sign_of_another_world_is_named() -> None:
 
 @pytest.mark.parametrize("options, named", [(["--runs", "0"], "--runs must be at least 1"),
                                             (["--minutes", "nan"], "--minutes must be a number above 0"),
-                                            (["--episodes", "0"], "--episodes must be at least 1")])
+                                            (["--episodes", "0"], "--episodes must be at least 1"),
+                                            (["--seeds", "0"], "--seeds must be at least 1")])
 def test_bad_options_are_refused_before_any_world_starts(tmp_path: Path, options: list[str], named: str,
                                                          capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["bench", "soak", *options, "--out", str(tmp_path / "soak.jsonl")]) == 2
@@ -57,23 +58,27 @@ def test_bad_options_are_refused_before_any_world_starts(tmp_path: Path, options
 def test_a_short_soak_reports_every_lane_no_failures_no_crosstalk_and_memory(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "soak.jsonl"
-    code = main(["bench", "soak", "--runs", "2", "--episodes", "1", "--minutes", "5", "--set", "episode.budget=2",
-                 "--set", "stop.rule=budget", "--out", str(out), "--json"])
+    code = main(["bench", "soak", "--runs", "2", "--episodes", "2", "--seeds", "1", "--minutes", "5",
+                 "--set", "episode.budget=2", "--set", "stop.rule=budget", "--out", str(out), "--json"])
     captured = capsys.readouterr()
     report = json.loads(captured.out)
     assert code == 0, report
-    assert report["episodes"] == 2  # one per lane: --episodes ends the soak before --minutes
-    assert report["failures"] == [] and report["crosstalk"] == {"checked": report["episodes"], "problems": []}
-    assert [(lane["lane"], lane["namespace"]) for lane in report["lanes"]] == [(0, "homebot/soak-0"),
-                                                                              (1, "homebot/soak-1")]
+    assert report["episodes"] == 4  # two per lane: --episodes ends the soak before --minutes
+    assert report["failures"] == [] and report["crosstalk"] == {"checked": 4, "problems": []}
+    assert [(lane["lane"], lane["namespace"], lane["episodes"]) for lane in report["lanes"]] == [
+        (0, "homebot/soak-0", 2), (1, "homebot/soak-1", 2)]
     assert len({lane["endpoint"] for lane in report["lanes"]}) == 2
     processes = report["memory"]["processes"]
     assert sorted(processes) == ["agent-0", "agent-1", "world-0", "world-1"]
-    assert all(row["first_mb"] > 0 and row["last_mb"] > 0 and row["growth"] is not None and row["late_growth"] == 0.0
-               for row in processes.values())  # one episode each: first, middle and last are the same
+    for row in processes.values():  # one seed a lane: its second episode is compared with its first
+        assert row["episodes"] == 2 and row["rounds"] == 2
+        assert row["first_mb"] > 0 and row["last_mb"] > 0
+        assert row["growth"] == round(row["last_mb"] / row["first_mb"] - 1, 4)
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     kinds = [line["kind"] for line in lines]
-    assert kinds.count("episode") == report["episodes"] and kinds[-1] == "report"
-    assert kinds.count("memory") >= 2  # at the start and at the end
-    assert "lane 0 episode 0 (seed 0): answered" in captured.err
+    assert kinds.count("episode") == 4 and kinds[-1] == "report"
+    assert kinds.count("memory") >= 1  # at the end, and each minute before
+    assert sorted((line["lane"], line["seed"]) for line in lines if line["kind"] == "episode") == [
+        (0, 0), (0, 0), (1, 1), (1, 1)]  # each lane goes round its own seed
+    assert "lane 0 episode 1 (seed 0): answered" in captured.err
     assert (tmp_path / "soak-worlds" / "world-1.log").is_file()

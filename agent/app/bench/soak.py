@@ -2,15 +2,17 @@
 of its own (its own namespace and port), checked for failures, for crosstalk between the worlds,
 and for memory that grows.
 
-Lane i of R runs seeds i, i + R, i + 2R… one after the other, so no two worlds hold the same home at
-once, and checks each result against what its own world must have answered (`crosstalk_problems`):
+Lane i of R runs seeds i, i + R, … i + (K − 1)R one after the other, round after round (K seeds a
+lane), so no two worlds hold the same home at once and memory is compared like for like; it checks
+each result against what its own world must have answered (`crosstalk_problems`):
 the reset's scenario is the seed's, the evaluator's record is of that scenario's target and saw at
 least a head frame per step (a world reset by another lane mid-episode would have started over),
 and where replies name their namespace, it is the lane's. Every minute (``sample_s``) the resident
 memory of each agent and world process is sampled; each episode's line also carries its agent's and
-its world's right after it, and growth is measured from after a lane's first episode (the models
-loaded, the first home built) to after its last. Episodes and samples are appended to a JSON-lines
-file as they come; progress goes to stderr.
+its world's right after it, and growth is measured between episodes of one seed: after the lane's
+last episode against after the same seed's episode in the first round (the models loaded, the
+homes built once) and in the middle round (is it still growing once warm). Episodes and samples
+are appended to a JSON-lines file as they come; progress goes to stderr.
 """
 
 from __future__ import annotations
@@ -87,7 +89,7 @@ def _expected(seed: int) -> tuple[str, str, dict[str, Any]]:
 
 
 def soak(config: Config, runs: int, minutes: float, out: Path, episodes: int | None = None,
-         sample_s: float = 60.0, progress: Progress | None = None) -> dict[str, Any]:
+         sample_s: float = 60.0, progress: Progress | None = None, seeds: int = 5) -> dict[str, Any]:
     """Run ``runs`` lanes side by side until ``minutes`` have passed (or each ran ``episodes``),
     every lane at least one episode, and report.
 
@@ -100,6 +102,7 @@ def soak(config: Config, runs: int, minutes: float, out: Path, episodes: int | N
         episodes: the most episodes per lane, or None for as many as fit.
         sample_s: seconds between memory samples.
         progress: told a line as each episode ends and each sample is taken.
+        seeds: the seeds each lane goes round.
 
     Returns:
         The report (`format_soak_report`); ``interrupted`` when Ctrl-C ended it.
@@ -115,8 +118,8 @@ def soak(config: Config, runs: int, minutes: float, out: Path, episodes: int | N
     context = multiprocessing.get_context("spawn")
     inbox = context.Queue()
     until = time.time() + minutes * 60.0
-    agents = [context.Process(target=_lane, args=(lane, config, runs, until, episodes, inbox), name=f"agent-{lane.index}")
-              for lane in lanes]
+    agents = [context.Process(target=_lane, args=(lane, config, runs, seeds, until, episodes, inbox),
+                              name=f"agent-{lane.index}") for lane in lanes]
     for agent in agents:
         agent.start()
     state = _Soak(out, time.monotonic(), {f"agent-{i}": a.pid for i, a in enumerate(agents)}
@@ -134,24 +137,25 @@ def soak(config: Config, runs: int, minutes: float, out: Path, episodes: int | N
         state.sample("end")
         for world in worlds:
             world.stop()
-    report = state.report(lanes, runs, minutes, episodes, sample_s)
+    report = state.report(lanes, runs, minutes, episodes, sample_s, seeds)
     report.update(interrupted=interrupted, world_logs=str(logs))
     state.append({"kind": "report", **report})
     return report
 
 
-def _lane(lane: Lane, config: Config, runs: int, until: float, episodes: int | None, outbox: Any) -> None:
+def _lane(lane: Lane, config: Config, runs: int, seeds: int, until: float, episodes: int | None,
+          outbox: Any) -> None:
     """A lane's agent process: episodes one after the other against the lane's world, each result
     (with its crosstalk check) put on ``outbox``, then ``done``."""
+    quiet_worker()
     from agent.app.runtime.request import RunRequest
     from agent.app.runtime.run import RunError, run_episode
 
-    quiet_worker()
     scratch = Path(tempfile.mkdtemp(prefix=f"homebot-soak-agent-{lane.index}-"))
     n = 0
     try:
         while n == 0 or (time.time() < until and (episodes is None or n < episodes)):
-            seed = lane.index + runs * n
+            seed = lane.index + runs * (n % seeds)
             request = RunRequest(seed=seed, config=config, out_root=scratch, connect=lane.endpoint,
                                  namespace=lane.namespace, run_id=f"soak-{lane.index}-{n}", save_map=False,
                                  record=False)
@@ -206,18 +210,19 @@ class _Soak:
                  + ", ".join(f"{name} {mb if mb is not None else '-'} MB" for name, mb in rss.items()))
 
     def report(self, lanes: list[Lane], runs: int, minutes: float, episodes: int | None,
-               sample_s: float) -> dict[str, Any]:
+               sample_s: float, seeds: int) -> dict[str, Any]:
         failures = [{key: e[key] for key in ("lane", "episode", "seed", "status", "reason")}
                     for e in self.episodes if e["status"] != "answered"]
         crosstalk = [{"lane": e["lane"], "episode": e["episode"], "seed": e["seed"], "problem": problem}
                      for e in self.episodes for problem in e["crosstalk"]]
         return {
-            "runs": runs, "minutes": minutes, "episodes_per_lane": episodes, "elapsed_min": round(self.minutes(), 2),
+            "runs": runs, "minutes": minutes, "episodes_per_lane": episodes, "seeds_per_lane": seeds,
+            "elapsed_min": round(self.minutes(), 2),
             "episodes": len(self.episodes), "failures": failures,
             "crosstalk": {"checked": len(self.episodes), "problems": crosstalk},
             "lanes": [_lane_row(lane, [e for e in self.episodes if e["lane"] == lane.index]) for lane in lanes],
             "memory": {"sample_s": sample_s, "samples": self.samples,
-                       "processes": _memory_rows(self.samples, self.episodes, runs)},
+                       "processes": _memory_rows(self.samples, self.episodes, runs, seeds)},
         }
 
 
@@ -225,7 +230,6 @@ def _gather(state: _Soak, inbox: Any, agents: list[Any], worlds: list[WorldProce
             runs: int) -> None:
     """Take the lanes' episodes as they come and sample memory on time, until every lane is done."""
     done: set[int] = set()
-    state.sample("start")
     next_sample = time.monotonic() + sample_s
     while len(done) < runs:
         try:
@@ -261,19 +265,23 @@ def _lane_row(lane: Lane, episodes: list[dict[str, Any]]) -> dict[str, Any]:
             "seconds_per_episode": round(sum(seconds) / len(seconds), 1) if seconds else None}
 
 
-def _memory_rows(samples: list[dict[str, Any]], episodes: list[dict[str, Any]], runs: int
+def _memory_rows(samples: list[dict[str, Any]], episodes: list[dict[str, Any]], runs: int, seeds: int
                  ) -> dict[str, dict[str, Any]]:
-    """Per process: resident memory after its lane's first episode, its middle one and its last, the
-    most seen (episode ends and timed samples), the growth from first to last and from the middle
-    to the last (fractions: the second says whether it is still growing once warm)."""
+    """Per process: resident memory after its lane's last episode, and after the same seed's episode
+    in the lane's first round and in its middle round; the most seen (episode ends and timed
+    samples); the growth from first to last and from middle to last (fractions)."""
     rows = {}
     for kind, index in ((kind, index) for kind in ("agent", "world") for index in range(runs)):
         name = f"{kind}-{index}"
-        after = [e[f"{kind}_rss_mb"] for e in episodes if e["lane"] == index and e.get(f"{kind}_rss_mb") is not None]
-        seen = after + [s["rss_mb"][name] for s in samples if s["rss_mb"].get(name) is not None]
-        first, middle, last = (after[0], after[len(after) // 2], after[-1]) if after else (None, None, None)
-        rows[name] = {"first_mb": first, "middle_mb": middle, "last_mb": last, "max_mb": max(seen) if seen else None,
-                      "episodes": len(after), "growth": _growth(first, last), "late_growth": _growth(middle, last)}
+        after = {e["episode"]: e[f"{kind}_rss_mb"] for e in episodes
+                 if e["lane"] == index and e["episode"] >= 0 and e.get(f"{kind}_rss_mb") is not None}
+        seen = list(after.values()) + [s["rss_mb"][name] for s in samples if s["rss_mb"].get(name) is not None]
+        last = max(after, default=None)
+        first, middle = (None, None) if last is None else (last % seeds, last % seeds + seeds * (last // seeds // 2))
+        mb = {key: after.get(n) for key, n in (("first_mb", first), ("middle_mb", middle), ("last_mb", last))}
+        rows[name] = {**mb, "max_mb": max(seen) if seen else None, "episodes": len(after), "rounds": len(after) / seeds,
+                      "growth": _growth(mb["first_mb"], mb["last_mb"]),
+                      "late_growth": _growth(mb["middle_mb"], mb["last_mb"])}
     return rows
 
 
@@ -310,7 +318,8 @@ def format_soak_report(report: dict[str, Any]) -> str:
                      f"{lane['failures']:>8} {per:>9}")
     memory = report["memory"]
     lines.append(f"memory (MB)  {'first':>7} {'middle':>7} {'last':>7} {'max':>7} {'growth':>7} {'late':>7}  "
-                 "(after the lane's first, middle and last episode; growth first→last, late middle→last)")
+                 f"(after the lane's last episode and its seed's in the first and middle round of "
+                 f"{report['seeds_per_lane']}; growth first→last, late middle→last)")
     for name, row in memory["processes"].items():
         cells = [_cell(row[key]) for key in ("first_mb", "middle_mb", "last_mb", "max_mb")]
         cells += ["-" if row[key] is None else f"{100 * row[key]:+.1f}%" for key in ("growth", "late_growth")]

@@ -51,6 +51,8 @@ def add_command(commands: Commands) -> None:
     soak.add_argument("--minutes", type=float, default=30.0,
                       help="how long lanes start new episodes (default 30; each lane runs at least one)")
     soak.add_argument("--episodes", type=int, default=None, help="at most this many episodes per lane")
+    soak.add_argument("--seeds", type=int, default=5,
+                      help="seeds each lane goes round, so memory is compared between episodes of one seed (default 5)")
     soak.add_argument("--sample-s", type=float, default=60.0, help="seconds between memory samples (default 60)")
     soak.add_argument("--out", type=Path, default=Path("runs/bench-soak.jsonl"),
                       help="episodes and memory samples, appended as they come (emptied first; default "
@@ -140,7 +142,7 @@ def _bench_step(args: argparse.Namespace) -> int:
     areas = AREAS if args.area is None else (args.area,)
     try:
         report = bench_step(load_settings(args), args.seed, areas,
-                            lambda line: print(line, file=sys.stderr, flush=True))
+                            lambda line: print(line, file=sys.stderr, flush=True), args.seeds)
     except RunError as error:
         print(f"homebot bench step: {error}", file=sys.stderr)
         return 1
@@ -157,7 +159,7 @@ def _bench_soak(args: argparse.Namespace) -> int:
     from agent.app.bench import dump
     from agent.app.bench.soak import format_soak_report, soak
 
-    for name, value, least in (("--runs", args.runs, 1), ("--episodes", args.episodes, 1)):
+    for name, value, least in (("--runs", args.runs, 1), ("--episodes", args.episodes, 1), ("--seeds", args.seeds, 1)):
         if value is not None and value < least:
             print(f"homebot bench soak: {name} must be at least {least}, got {value}", file=sys.stderr)
             return 2
@@ -167,7 +169,7 @@ def _bench_soak(args: argparse.Namespace) -> int:
             return 2
     args.set.insert(0, "bus.listen=[]")  # agents connect to their worlds; --listen still applies
     report = soak(load_settings(args), args.runs, args.minutes, args.out, args.episodes, args.sample_s,
-                  lambda line: print(line, file=sys.stderr, flush=True))
+                  lambda line: print(line, file=sys.stderr, flush=True), args.seeds)
     print(dump(report) if args.json else format_soak_report(report))
     print(f"episodes and memory samples: {args.out}; world logs: {report['world_logs']}", file=sys.stderr)
     if report["interrupted"]:
