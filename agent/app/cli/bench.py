@@ -142,7 +142,7 @@ def _bench_step(args: argparse.Namespace) -> int:
     areas = AREAS if args.area is None else (args.area,)
     try:
         report = bench_step(load_settings(args), args.seed, areas,
-                            lambda line: print(line, file=sys.stderr, flush=True), args.seeds)
+                            lambda line: print(line, file=sys.stderr, flush=True))
     except RunError as error:
         print(f"homebot bench step: {error}", file=sys.stderr)
         return 1
