@@ -36,7 +36,7 @@ import zenoh
 from worlds.bus.codec import Message
 from worlds.bus.keys import Keys
 from worlds.bus.rpc import Arrays, CommandServer, Handler, RequestError
-from worlds.bus.session import EndpointError, open_session
+from worlds.bus.session import EndpointError, load_zenoh_config, open_session
 from worlds import commands
 from worlds.evaluation import EpisodeRecord
 from worlds.home import generate_home
@@ -273,6 +273,7 @@ def run_world(
     camera: CameraConfig,
     seed: int | None,
     stop: threading.Event,
+    zenoh_config: str | None = None,
 ) -> None:
     """Open a session on the given endpoints and serve a world until ``stop`` is set.
 
@@ -283,11 +284,12 @@ def run_world(
         camera: the head camera.
         seed: the home to reset to at start, if any.
         stop: set to stop serving.
+        zenoh_config: a Zenoh configuration file (TLS, access control; docs/hosts.md), if any.
 
     Raises:
-        EndpointError: when an endpoint cannot be opened.
+        EndpointError: when an endpoint or the Zenoh configuration file cannot be used.
     """
-    session = open_session(listen, connect)
+    session = open_session(listen, connect, zenoh_config)
     try:
         WorldServer(session, namespace, camera).serve(stop, seed)
     finally:
@@ -303,6 +305,10 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--connect", action="append", default=[], help="endpoint to connect to (repeatable)")
     parser.add_argument("--seed", type=int, help="reset to this home at start")
+    parser.add_argument("--zenoh-config", metavar="FILE",
+                        help="a Zenoh configuration file (JSON5): TLS with mutual authentication, access "
+                             "control; its listen/connect endpoints, where it sets them, replace these "
+                             "options' (docs/hosts.md)")
     parser.add_argument("--width", type=int, default=defaults.width, help="camera width in pixels")
     parser.add_argument("--height", type=int, default=defaults.height, help="camera height in pixels")
     parser.add_argument("--hfov", type=float, default=defaults.hfov_deg, help="horizontal field of view, degrees")
@@ -327,12 +333,18 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(str(error))
     if args.seed is not None and args.seed < 0:
         parser.error(f"--seed: {args.seed} must not be negative")
+    if args.zenoh_config:
+        try:
+            load_zenoh_config(args.zenoh_config)
+        except EndpointError as error:
+            parser.error(f"--zenoh-config: {error}")
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(levelname)s %(message)s")
     stop = threading.Event()
     for signum in (signal.SIGTERM, signal.SIGINT):
         signal.signal(signum, lambda *_: stop.set())
     try:
-        run_world(args.namespace, args.listen or [DEFAULT_LISTEN], args.connect, camera, args.seed, stop)
+        run_world(args.namespace, args.listen or [DEFAULT_LISTEN], args.connect, camera, args.seed, stop,
+                  args.zenoh_config)
     except EndpointError as error:
         log.error("%s", error)
         return 2

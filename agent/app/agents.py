@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import zenoh
 
 from worlds.bus.keys import check_namespace
-from worlds.bus.session import EndpointError, open_session
+from worlds.bus.session import EndpointError, ZenohConfigError, open_session, session_config
 
 log = logging.getLogger(__name__)
 
@@ -86,33 +86,38 @@ class AgentInfo:
         return cls(chunks[0], check_namespace(chunks[1].replace(".", "/")), "/".join(chunks[2:]))
 
 
-def open_agent_session(listen: list[str], connect: list[str]) -> tuple[zenoh.Session, list[str]]:
+def open_agent_session(listen: list[str], connect: list[str],
+                       zenoh_config: str | None = None) -> tuple[zenoh.Session, list[str]]:
     """An agent's session; a TCP listen endpoint that another process holds is swapped for a free
     port on the same host, and the taken endpoint is connected to instead (one line on stderr says so).
 
     Args:
         listen: the endpoints the settings say to listen on.
         connect: the endpoints to connect to (the world's).
+        zenoh_config: a Zenoh configuration file (`worlds.bus.session.open_session`), or None.
 
     Returns:
-        The session and the endpoints it listens on.
+        The session and the endpoints it listens on (a Zenoh configuration file's own, where it
+        sets them).
 
     Raises:
         EndpointError: an endpoint cannot be opened for another reason.
     """
     try:
-        return open_session(listen=listen, connect=connect), list(listen)
+        return open_session(listen, connect, zenoh_config), session_config(listen, connect, zenoh_config)[1]
+    except ZenohConfigError:
+        raise
     except EndpointError:
         taken = [endpoint for endpoint in listen if _is_taken(endpoint)]
         if not taken:
             raise
     taken_listen = [_free_like(endpoint) if endpoint in taken else endpoint for endpoint in listen]
-    session = open_session(listen=taken_listen, connect=[*connect, *taken])
+    session = open_session(taken_listen, [*connect, *taken], zenoh_config)
     for endpoint, instead in zip(listen, taken_listen):
         if endpoint != instead:
             log.warning("%s is taken by another process: this agent listens on %s and connects to %s",
                         endpoint, instead, endpoint)
-    return session, taken_listen
+    return session, session_config(taken_listen, [*connect, *taken], zenoh_config)[1]
 
 
 def announce(session: zenoh.Session, run_id: str, namespace: str, listen: list[str]) -> zenoh.LivelinessToken | None:

@@ -45,12 +45,15 @@ class CameraSettings:
 
 @dataclass(frozen=True)
 class BusSettings:
-    """The agent's side of the wire: where `homebot watch` reaches it, and how long it waits on the world."""
+    """The agent's side of the wire: where `homebot watch` reaches it, how long it waits on the world,
+    and a Zenoh configuration file (TLS, access control: docs/hosts.md) its sessions and the worlds
+    it starts open with ("": none; ``--zenoh-config FILE``)."""
 
     listen: tuple[str, ...] = ("tcp/127.0.0.1:7450",)
     query_timeout_s: float = 10.0
     move_timeout_s: float = 30.0
     world_start_timeout_s: float = 60.0
+    zenoh_config: str = ""
 
 
 @dataclass(frozen=True)

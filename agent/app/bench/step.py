@@ -66,14 +66,17 @@ class MemoryTimer(StageTimer):
                 self.rss_mb.append(rss)
 
 
-def resident_mb() -> float | None:
-    """This process's resident memory, from ``/proc/self/statm``.
+def resident_mb(pid: int | None = None) -> float | None:
+    """A process's resident memory, from ``/proc/<pid>/statm``.
+
+    Args:
+        pid: the process; None for this one.
 
     Returns:
-        Megabytes (10⁶ bytes), or None where there is no ``/proc``.
+        Megabytes (10⁶ bytes), or None where there is no ``/proc`` or no such process.
     """
     try:
-        pages = int(Path("/proc/self/statm").read_text().split()[1])
+        pages = int(Path(f"/proc/{pid or 'self'}/statm").read_text().split()[1])
     except (OSError, IndexError, ValueError):
         return None
     return pages * os.sysconf("SC_PAGE_SIZE") / 1e6

@@ -1,5 +1,5 @@
 """`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world; the
-world's answers to malformed requests (fuzz)."""
+world's answers to malformed requests (fuzz); episodes side by side for a while (soak)."""
 
 from __future__ import annotations
 
@@ -50,6 +50,22 @@ def add_command(commands: Commands) -> None:
     fuzz.add_argument("--seed", type=int, default=0, help="the requests' seed (default 0)")
     fuzz.add_argument("--json", action="store_true", help="print the figures as JSON")
     fuzz.set_defaults(handler=_bench_fuzz)
+
+    soak = benches.add_parser("soak", help="episodes side by side, each against a world of its own, for a while: "
+                                           "failures, crosstalk between the worlds, memory over time")
+    add_config_options(soak)
+    soak.add_argument("--runs", type=int, default=4, help="episodes at once, each with its own world (default 4)")
+    soak.add_argument("--minutes", type=float, default=30.0,
+                      help="how long lanes start new episodes (default 30; each lane runs at least one)")
+    soak.add_argument("--episodes", type=int, default=None, help="at most this many episodes per lane")
+    soak.add_argument("--seeds", type=int, default=5,
+                      help="seeds each lane goes round, so memory is compared between episodes of one seed (default 5)")
+    soak.add_argument("--sample-s", type=float, default=60.0, help="seconds between memory samples (default 60)")
+    soak.add_argument("--out", type=Path, default=Path("runs/bench-soak.jsonl"),
+                      help="episodes and memory samples, appended as they come (emptied first; default "
+                           "runs/bench-soak.jsonl)")
+    soak.add_argument("--json", action="store_true", help="print the report as JSON")
+    soak.set_defaults(handler=_bench_soak)
 
 
 def _bench_fuzz(args: argparse.Namespace) -> int:
@@ -165,3 +181,27 @@ def _bench_step(args: argparse.Namespace) -> int:
         return INTERRUPTED
     print(dump(report) if args.json else format_step_report(report))
     return 0
+
+
+def _bench_soak(args: argparse.Namespace) -> int:
+    import math
+
+    from agent.app.bench import dump
+    from agent.app.bench.soak import format_soak_report, soak
+
+    for name, value, least in (("--runs", args.runs, 1), ("--episodes", args.episodes, 1), ("--seeds", args.seeds, 1)):
+        if value is not None and value < least:
+            print(f"homebot bench soak: {name} must be at least {least}, got {value}", file=sys.stderr)
+            return 2
+    for name, value in (("--minutes", args.minutes), ("--sample-s", args.sample_s)):
+        if not (math.isfinite(value) and value > 0):
+            print(f"homebot bench soak: {name} must be a number above 0, got {value}", file=sys.stderr)
+            return 2
+    args.set.insert(0, "bus.listen=[]")  # agents connect to their worlds; --listen still applies
+    report = soak(load_settings(args), args.runs, args.minutes, args.out, args.episodes, args.sample_s,
+                  lambda line: print(line, file=sys.stderr, flush=True), args.seeds)
+    print(dump(report) if args.json else format_soak_report(report))
+    print(f"episodes and memory samples: {args.out}; world logs: {report['world_logs']}", file=sys.stderr)
+    if report["interrupted"]:
+        return INTERRUPTED
+    return 1 if report["failures"] or report["crosstalk"]["problems"] else 0

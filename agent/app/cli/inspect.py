@@ -11,7 +11,7 @@ from pathlib import Path
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import open_session
 from agent.app.agents import AgentInfo, find_agents
-from agent.app.cli.options import DEFAULT_AGENT_ENDPOINT, Commands
+from agent.app.cli.options import DEFAULT_AGENT_ENDPOINT, Commands, add_zenoh_config_option
 
 
 def add_command(commands: Commands) -> None:
@@ -32,6 +32,7 @@ def add_command(commands: Commands) -> None:
                          help="seconds to wait for the agent of --run to announce itself (default 30)")
     inspect.add_argument("--host", default="127.0.0.1", help="the address the page is served on (default 127.0.0.1)")
     inspect.add_argument("--port", type=int, default=0, help="the page's port (default: any free one)")
+    add_zenoh_config_option(inspect)
     inspect.set_defaults(handler=_inspect)
 
 
@@ -64,13 +65,13 @@ def _inspect(args: argparse.Namespace) -> int:
     else:
         endpoint, namespace = args.connect or DEFAULT_AGENT_ENDPOINT, args.namespace
         if args.run:
-            found = _announced(endpoint, args.run, args.timeout)
+            found = _announced(endpoint, args.run, args.timeout, args.zenoh_config)
             if found is None:
                 print(f"homebot inspect: --run {args.run}: no such agent announced itself through {endpoint} "
                       f"within {args.timeout:.0f} s (`homebot watch --list` shows the running ones)", file=sys.stderr)
                 return 1
             endpoint, namespace = found.endpoint, found.namespace
-        session = open_session(connect=[endpoint])
+        session = open_session(connect=[endpoint], zenoh_config=args.zenoh_config)
         agent = LiveAgent(session, namespace, history)
         server = Inspector(history, {"mode": "live", "source": f"{endpoint} {namespace or '(any namespace)'}"},
                            controller=agent.control, result=lambda: agent.outcome, host=args.host, port=args.port)
@@ -88,9 +89,9 @@ def _inspect(args: argparse.Namespace) -> int:
     return 0
 
 
-def _announced(endpoint: str, run_id: str, timeout_s: float) -> AgentInfo | None:
+def _announced(endpoint: str, run_id: str, timeout_s: float, zenoh_config: str | None) -> AgentInfo | None:
     """The agent of ``run_id`` as it announced itself through ``endpoint``, or None."""
-    session = open_session(connect=[endpoint])
+    session = open_session(connect=[endpoint], zenoh_config=zenoh_config)
     try:
         found = find_agents(session, timeout_s, run_id)
     finally:

@@ -15,7 +15,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from agent.app.config import Config, load_config
+from agent.app.config import Config, ConfigError, load_config
 from agent.app.config_bounds import MAX_SEED
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import check_endpoint
@@ -40,6 +40,40 @@ def add_config_options(parser: argparse.ArgumentParser) -> None:
                         help="override one setting, e.g. --set vlm.sim.skill=0.6 (repeatable)")
     parser.add_argument("--listen", action="append", metavar="ENDPOINT",
                         help=f"where `homebot watch` can reach this agent (default {DEFAULT_AGENT_ENDPOINT})")
+    add_zenoh_config_option(parser)
+
+
+def add_zenoh_config_option(parser: argparse.ArgumentParser) -> None:
+    """Give a command that opens Zenoh sessions ``--zenoh-config FILE``, checked as it is parsed.
+
+    Args:
+        parser: the command's parser.
+    """
+    parser.add_argument("--zenoh-config", metavar="FILE", type=zenoh_config_file,
+                        help="a Zenoh configuration file (JSON5) every session of the command, and every "
+                             "world it starts, opens with: TLS with mutual authentication, access control "
+                             "(docs/hosts.md); same as --set bus.zenoh_config=FILE")
+
+
+def zenoh_config_file(text: str) -> str:
+    """The argparse type of ``--zenoh-config``: a Zenoh configuration file Zenoh accepts.
+
+    Args:
+        text: the option's value.
+
+    Returns:
+        The file's absolute path (worlds started in other folders find it too).
+
+    Raises:
+        argparse.ArgumentTypeError: the file is missing or Zenoh refuses it, saying why.
+    """
+    from worlds.bus.session import ZenohConfigError, load_zenoh_config
+
+    try:
+        load_zenoh_config(text)
+    except ZenohConfigError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return str(Path(text).resolve())
 
 
 def add_suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: str) -> None:
@@ -72,10 +106,31 @@ def load_settings(args: argparse.Namespace) -> Config:
     Raises:
         ConfigError: a file or value that cannot be used, naming the key.
     """
-    overrides = list(args.set)
+    overrides = [*args.set, *_zenoh_override(args)]
     if args.listen:
         overrides.append("bus.listen=" + json.dumps(args.listen))
-    return load_config(args.config, overrides)
+    return _zenoh_checked(load_config(args.config, overrides))
+
+
+def _zenoh_checked(config: Config) -> Config:
+    """``config``, once its ``bus.zenoh_config`` (from a file or ``--set`` too) proved usable.
+
+    Raises:
+        ConfigError: Zenoh cannot use the file, naming the key and saying why.
+    """
+    from worlds.bus.session import ZenohConfigError, load_zenoh_config
+
+    if config.bus.zenoh_config:
+        try:
+            load_zenoh_config(config.bus.zenoh_config)
+        except ZenohConfigError as error:
+            raise ConfigError(f"config: bus.zenoh_config: {error}") from None
+    return config
+
+
+def _zenoh_override(args: argparse.Namespace) -> list[str]:
+    """The ``bus.zenoh_config`` override ``--zenoh-config`` stands for, if given."""
+    return [f"bus.zenoh_config={json.dumps(args.zenoh_config)}"] if args.zenoh_config else []
 
 
 def suite_settings(args: argparse.Namespace) -> Config | None:
@@ -100,7 +155,7 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
     except ValueError as error:
         print(f"homebot: --worlds: {error}", file=sys.stderr)
         return None
-    return load_config(args.config, [*args.set, "bus.listen=[]"])
+    return _zenoh_checked(load_config(args.config, [*args.set, *_zenoh_override(args), "bus.listen=[]"]))
 
 
 def seed_option(text: str) -> int:

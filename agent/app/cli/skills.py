@@ -123,7 +123,7 @@ def run_skill_command(args: argparse.Namespace) -> int:
     namespace = check_namespace(args.namespace or ("homebot/default" if args.connect else
                                                    f"homebot/skill-{time.strftime('%H%M%S')}"))
     endpoint = args.connect or free_tcp_endpoint()
-    session = open_session(connect=[endpoint])
+    session = open_session(connect=[endpoint], zenoh_config=config.bus.zenoh_config)
     link = WorldLink(session, Keys(namespace), config.bus.query_timeout_s)
     world = None
     try:
@@ -131,7 +131,8 @@ def run_skill_command(args: argparse.Namespace) -> int:
         if args.connect is None:
             folder = Path("runs") / f"skill-{args.name}-{time.strftime('%Y%m%d-%H%M%S')}"
             folder.mkdir(parents=True, exist_ok=True)
-            world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log")
+            world = WorldProcess(namespace, endpoint, config.camera, folder / "world.log",
+                                 zenoh_config=config.bus.zenoh_config)
             world.wait_ready(link, config.bus.world_start_timeout_s)
         reset = {"seed": args.seed, **({"tabletop": args.tabletop} if args.tabletop else {})}
         link.call("reset", reset, timeout_s=config.bus.world_start_timeout_s)

@@ -14,7 +14,7 @@ import zenoh
 
 from worlds.bus.session import open_session
 from agent.app.agents import AgentInfo, find_agents
-from agent.app.cli.options import DEFAULT_AGENT_ENDPOINT, Commands
+from agent.app.cli.options import DEFAULT_AGENT_ENDPOINT, Commands, add_zenoh_config_option
 
 _FAULTS = ("failure", "raise")
 
@@ -37,6 +37,7 @@ def add_command(commands: Commands) -> None:
     watch.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for a snapshot (default 30)")
     watch.add_argument("--gather", type=float, default=1.5,
                        help="seconds --list waits for agents to announce themselves (default 1.5)")
+    add_zenoh_config_option(watch)
     control = watch.add_mutually_exclusive_group()
     control.add_argument("--state", dest="control", action="store_const", const=("state", {}),
                          help="print whether the agent is paused, its breakpoints and faults, and exit")
@@ -79,7 +80,7 @@ def _watch(args: argparse.Namespace) -> int:
         return 2
     endpoint, namespace = args.connect, args.namespace
     if args.list or args.run is not None:
-        session = open_session(connect=[args.connect])
+        session = open_session(connect=[args.connect], zenoh_config=args.zenoh_config)
         try:
             found = find_agents(session, args.gather if args.list else args.timeout, args.run)
         finally:
@@ -91,7 +92,7 @@ def _watch(args: argparse.Namespace) -> int:
                   f"{args.timeout:.0f} s (`homebot watch --list` shows the running ones)", file=sys.stderr)
             return 1
         endpoint, namespace = found[0].endpoint, found[0].namespace
-    session = open_session(connect=[endpoint])
+    session = open_session(connect=[endpoint], zenoh_config=args.zenoh_config)
     try:
         if args.control is not None:
             return _control(session, namespace, args)

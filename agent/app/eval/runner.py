@@ -231,7 +231,8 @@ def _start_worker_world(config: Config, addresses: Any | None) -> None:
         return
     namespace = f"homebot/eval-{os.getpid()}"
     endpoint = free_tcp_endpoint()
-    world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log")
+    world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log",
+                         zenoh_config=config.bus.zenoh_config)
     atexit.register(world.stop)
     _worker_world = WorkerWorld(namespace, endpoint, scratch)
 

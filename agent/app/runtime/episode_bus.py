@@ -20,7 +20,7 @@ from agent.app.runtime.request import DEFAULT_NAMESPACE, RunRequest, new_run_id
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
 from worlds.bus.keys import Keys, check_namespace
 from worlds.bus.link import WorldLink
-from worlds.bus.session import free_tcp_endpoint
+from worlds.bus.session import free_tcp_endpoint, unreached
 
 
 @dataclass
@@ -62,7 +62,7 @@ class EpisodeBus:
         endpoint = request.connect or free_tcp_endpoint()
         # a spawned world connects to the agent; an agent that listens nowhere connects to the world
         connect = [endpoint] if request.connect or not config.bus.listen else []
-        session, listen = open_agent_session(list(config.bus.listen), connect)
+        session, listen = open_agent_session(list(config.bus.listen), connect, config.bus.zenoh_config)
         token = None
         try:
             token = announce(session, run_id, namespace, listen)
@@ -80,7 +80,7 @@ class EpisodeBus:
             return
         prepared = request.seed if request.scenario is None and request.scene is None else None
         self.world = WorldProcess(self.namespace, self.endpoint, request.config.camera, self.folder / "world.log",
-                                  self.listen, prepared)
+                                  self.listen, prepared, request.config.bus.zenoh_config)
 
     def wait_ready(self, timeout_s: float) -> None:
         """Wait until the world's liveliness token is there.
@@ -95,7 +95,8 @@ class EpisodeBus:
         if self.world is not None:
             self.world.wait_ready(self.link, timeout_s)
         elif not self.link.liveness.wait_alive(timeout_s):
-            raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}")
+            why = "".join(f"; {reason}" for reason in unreached(self.session, [self.endpoint]))
+            raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}{why}")
 
     def close(self) -> None:
         """Stop the world spawned here, withdraw the token and close the session."""

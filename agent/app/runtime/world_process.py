@@ -29,10 +29,11 @@ class WorldProcess:
             soon as the world is up, with no retries on either side).
         seed: the home it builds at start, before it answers (a first reset to just this seed is
             answered with it).
+        zenoh_config: a Zenoh configuration file its session opens with ("": none).
     """
 
     def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path,
-                 connect: list[str] | None = None, seed: int | None = None) -> None:
+                 connect: list[str] | None = None, seed: int | None = None, zenoh_config: str = "") -> None:
         self.log_path = log_path
         command = [
             sys.executable, "-m", "worlds.server",
@@ -40,6 +41,7 @@ class WorldProcess:
             "--listen", endpoint,
             *(word for other in connect or [] for word in ("--connect", other)),
             *(("--seed", str(seed)) if seed is not None else ()),
+            *(("--zenoh-config", zenoh_config) if zenoh_config else ()),
             "--width", str(camera.width),
             "--height", str(camera.height),
             "--hfov", str(camera.hfov_deg),
