@@ -8,11 +8,12 @@ import shlex
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from agent.app.config import CameraSettings
 from worlds.bus.link import WorldLink
-from worlds.bus.liveness import describe_exit
+from worlds.bus.liveness import describe_exit, refused
 
 log = logging.getLogger(__name__)
 
@@ -40,6 +41,7 @@ class WorldProcess:
     def __init__(self, namespace: str, endpoint: str, camera: CameraSettings, log_path: Path,
                  connect: list[str] | None = None, seed: int | None = None) -> None:
         self.log_path = log_path
+        self.endpoint = endpoint
         command = [
             sys.executable, "-m", "worlds.server",
             "--namespace", namespace,
@@ -77,6 +79,26 @@ class WorldProcess:
             if waited >= timeout_s:
                 raise WorldStartError(f"the world process did not come up within {timeout_s:.0f} s; "
                                       f"{self.describe_log()}")
+
+    def wait_listening(self, timeout_s: float) -> None:
+        """Wait until the world accepts connections at its endpoint (for an agent that joins it
+        rather than waiting for its token); raise WorldStartError if it has ended or is too slow.
+
+        Args:
+            timeout_s: how long to wait.
+
+        Raises:
+            WorldStartError: the process has ended, or does not listen in time.
+        """
+        deadline = time.monotonic() + timeout_s
+        while refused(self.endpoint) is not None:
+            code = self.process.poll()
+            if code is not None:
+                raise WorldStartError(f"the world process has ended: {describe_exit(code)}; {self.describe_log()}")
+            if time.monotonic() >= deadline:
+                raise WorldStartError(f"the world process did not listen at {self.endpoint} within {timeout_s:.0f} s; "
+                                      f"{self.describe_log()}")
+            time.sleep(0.1)
 
     def describe_log(self, lines: int = 20) -> str:
         """Where the world's log is and its last lines, to end a message with.
