@@ -25,12 +25,16 @@ pytestmark = pytest.mark.slow
 #: Longer than any test here may take: a start-up timeout a fault must not wait out.
 NEVER_S = "600"
 
+#: This checkout, ahead of any installed copy, for the processes the tests start.
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parent.parent),
+                                                                os.environ.get("PYTHONPATH")]))}
+
 
 def _run(tmp_path: Path, *args: str) -> subprocess.Popen:
     """`homebot run` in its own process group, listening on a free port, its folders under ``tmp_path``."""
     return subprocess.Popen([sys.executable, "-m", "agent.app.cli", "run", "--out", str(tmp_path / "runs"),
                              "--listen", free_tcp_endpoint(), "--set", f"bus.world_start_timeout_s={NEVER_S}", *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True, env=ENV)
 
 
 def _world_of(run: subprocess.Popen, timeout_s: float = 120.0) -> psutil.Process:
@@ -127,7 +131,7 @@ def test_joining_a_port_nobody_listens_on_is_connection_refused(tmp_path: Path) 
 def test_joining_under_a_namespace_no_world_serves_names_the_visible_worlds(tmp_path: Path) -> None:
     endpoint = free_tcp_endpoint()
     world = subprocess.Popen([sys.executable, "-m", "worlds.server", "--namespace", "homebot/elsewhere",
-                              "--listen", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                              "--listen", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENV)
     try:
         with open_session(connect=[endpoint]) as session:
             watch = LivenessWatch(session, Keys("homebot/elsewhere").world_alive)
