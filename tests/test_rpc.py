@@ -14,7 +14,7 @@ import zenoh
 
 from worlds.bus.codec import Message, decode, encode
 from worlds.bus.keys import ANY_AGENT_TREE, Keys, check_namespace
-from worlds.bus.liveness import LivenessWatch
+from worlds.bus.liveness import LivenessWatch, WorldWatch
 from worlds.bus.rpc import CommandServer, PendingReply, QueryFailed, RequestError, call
 from worlds.bus.session import EndpointError, check_endpoint, free_tcp_endpoint, open_session
 
@@ -208,7 +208,7 @@ def test_reply_without_ok_is_a_failure(bus: Bus) -> None:
 def test_liveness_watch_follows_token_and_gone_fails_pending_query(bus: Bus) -> None:
     """The token is seen; once it is undeclared `gone` gives a reason and a waiting query fails with it."""
     keys = Keys(bus.namespace)
-    watch = LivenessWatch(bus.client_session, keys.world_alive)
+    watch = WorldWatch(bus.client_session, keys)
     try:
         assert watch.gone() is None
         token = bus.server_session.liveliness().declare_token(keys.world_alive)
@@ -218,7 +218,7 @@ def test_liveness_watch_follows_token_and_gone_fails_pending_query(bus: Bus) -> 
         server = CommandServer(bus.server_session, bus.namespace)
         server.add(keys.world_cmd("observe"), echo)
         time.sleep(PROPAGATE_S)
-        pending = PendingReply(bus.client_session, keys.world_cmd("observe"), timeout_s=60, gone=watch.gone)
+        pending = PendingReply(bus.client_session, keys.world_cmd("observe"), timeout_s=60, watch=watch)
         assert pending.poll() is None
         token.undeclare()
         deadline = time.monotonic() + 5

@@ -9,12 +9,15 @@ import zenoh
 
 from worlds.bus.codec import Message
 from worlds.bus.keys import Keys
-from worlds.bus.liveness import LivenessWatch
+from worlds.bus.liveness import WorldWatch
 from worlds.bus.rpc import Arrays, PendingReply
 
 
 class WorldLink:
     """Sends world commands; any query fails at once with a reason when the world's token goes.
+
+    ``liveness`` (a `WorldWatch`) follows the world: its token, and its process once the agent that
+    started it says so (`follow_process`); it words why a query got no reply.
 
     Args:
         session: the bus session.
@@ -26,7 +29,7 @@ class WorldLink:
         self.session = session
         self.keys = keys
         self.timeout_s = timeout_s
-        self.liveness = LivenessWatch(session, keys.world_alive)
+        self.liveness = WorldWatch(session, keys)
 
     def request(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
                 arrays: Arrays | None = None, on_reply: Callable[[], None] | None = None) -> PendingReply:
@@ -43,7 +46,7 @@ class WorldLink:
             The pending reply.
         """
         return PendingReply(self.session, self.keys.world_cmd(verb), meta, arrays,
-                            timeout_s or self.timeout_s, self.liveness.gone, on_reply=on_reply)
+                            timeout_s or self.timeout_s, self.liveness, on_reply=on_reply)
 
     def describe(self, timeout_s: float | None = None, on_reply: Callable[[], None] | None = None) -> PendingReply:
         """Ask for the robot's description (URDF, cameras, arm joints and limits).
@@ -56,7 +59,7 @@ class WorldLink:
             The pending reply.
         """
         return PendingReply(self.session, self.keys.world_description, {}, None,
-                            timeout_s or self.timeout_s, self.liveness.gone, on_reply=on_reply)
+                            timeout_s or self.timeout_s, self.liveness, on_reply=on_reply)
 
     def call(self, verb: str, meta: dict[str, Any] | None = None, timeout_s: float | None = None,
              arrays: Arrays | None = None) -> Message:
@@ -75,6 +78,15 @@ class WorldLink:
             QueryFailed: no reply came, or the world is gone.
         """
         return self.request(verb, meta, timeout_s, arrays).wait()
+
+    def follow_process(self, exit_code: Callable[[], int | None]) -> None:
+        """Follow the world's process (one this agent started), to tell a world that is gone from
+        one that stopped answering, and to say how it ended.
+
+        Args:
+            exit_code: the process's exit code, None while it runs (`subprocess.Popen.poll`).
+        """
+        self.liveness.follow_process(exit_code)
 
     def close(self) -> None:
         self.liveness.close()

@@ -14,7 +14,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import zenoh
@@ -154,14 +154,54 @@ class CommandServer:
             query.drop()
 
 
+class ServerWatch(Protocol):
+    """What a client knows of the server behind a key, to say why a query got no reply
+    (`worlds.bus.liveness.WorldWatch` is the world's)."""
+
+    def gone(self) -> str | None:
+        """Why the server is gone.
+
+        Returns:
+            The reason; None while it is there.
+        """
+
+    def hold_s(self) -> float:
+        """How long a query that Zenoh ended without a reply waits for `gone` to say why.
+
+        Returns:
+            Seconds; inf waits to the query's deadline.
+        """
+
+    def silent(self, timeout_s: float) -> str:
+        """Why no reply came in time.
+
+        Args:
+            timeout_s: the query's timeout.
+
+        Returns:
+            The reason.
+        """
+
+    def unserved(self) -> str:
+        """Why nobody serves the key.
+
+        Returns:
+            The reason.
+        """
+
+
 class PendingReply:
     """A query in flight. `poll` returns None until the reply arrives, then the reply's message.
 
     Zenoh hands the reply (and the query's end, with or without one) to a callback in its own
     thread; ``on_reply`` is called there too, so a caller that waits on something else (a tree
-    that waits between ticks) wakes as soon as there is something to poll. ``gone`` is asked on
-    every poll; when it returns a reason (the server's liveliness token went), the query fails with
-    that reason at once instead of waiting for its deadline.
+    that waits between ticks) wakes as soon as there is something to poll. ``watch``, when given,
+    is asked on every poll: once it says the server is gone (its liveliness token went), the query
+    fails with that reason at once instead of waiting for its deadline; it also words the reason
+    when no reply comes in time or nobody serves the key. A query that Zenoh ends without a reply
+    (its server's session closed, or nobody serves the key) waits ``watch.hold_s()`` for the watch
+    to say whether the server is gone, since a server that dies ends its queries and drops its
+    token at the same moment, in either order.
 
     Args:
         session: the bus session.
@@ -169,7 +209,7 @@ class PendingReply:
         meta: its metadata.
         arrays: its arrays.
         timeout_s: how long the reply may take.
-        gone: says why the server is gone, if it is.
+        watch: what the client knows of the server; plain reasons without it.
         limits: the largest reply accepted.
         on_reply: called (from Zenoh's thread) when the reply arrives or the query ends without one.
     """
@@ -181,18 +221,19 @@ class PendingReply:
         meta: dict[str, Any] | None = None,
         arrays: Arrays | None = None,
         timeout_s: float = 10.0,
-        gone: Callable[[], str | None] | None = None,
+        watch: ServerWatch | None = None,
         limits: Limits = DEFAULT_LIMITS,
         on_reply: Callable[[], None] | None = None,
     ) -> None:
         self.key = key
         self.timeout_s = timeout_s
-        self._gone = gone
+        self._watch = watch
         self._limits = limits
         self._on_reply = on_reply
         self._reply: zenoh.Reply | None = None
         self._arrived = threading.Event()  # set once there is a reply, or there will be none
         self._started = time.monotonic()
+        self._ended_at: float | None = None  # when the query was seen ended without a reply
         session.get(key, zenoh.handlers.Callback(self._received, self._ended),
                     payload=encode(meta or {}, arrays), timeout=timeout_s)
 
@@ -223,20 +264,14 @@ class PendingReply:
         """
         ended = self._arrived.is_set()  # read first: a reply is stored before the event is set
         reply = self._reply
-        if reply is None and ended:
-            if self.elapsed_s >= self.timeout_s * 0.99:
-                raise QueryFailed(f"{self.key}: no reply within {self.timeout_s:.1f} s")
-            raise QueryFailed(f"{self.key}: nobody serves this key (is the world running?)")
         if reply is None:
-            reason = self._gone() if self._gone else None
-            if reason:
+            reason = self._no_reply(ended)
+            if reason is not None:
                 raise QueryFailed(f"{self.key}: {reason}")
-            if self.elapsed_s > self.timeout_s:
-                raise QueryFailed(f"{self.key}: no reply within {self.timeout_s:.1f} s")
             return None
         if reply.err is not None:
-            if self.elapsed_s >= self.timeout_s * 0.99:  # Zenoh reports its own deadline as an error reply
-                raise QueryFailed(f"{self.key}: no reply within {self.timeout_s:.1f} s")
+            if self._timed_out():  # Zenoh reports its own deadline as an error reply
+                raise QueryFailed(f"{self.key}: {self._silent()}")
             raise QueryFailed(f"{self.key}: error reply: {reply.err.payload.to_bytes()!r}")
         try:
             message = decode(reply.ok.payload.to_bytes(), self._limits)
@@ -245,6 +280,30 @@ class PendingReply:
         if message.meta.get("ok") is not True:
             raise QueryFailed(f"{self.key}: {message.meta.get('error', 'the reply says it failed, without a reason')}")
         return message
+
+    def _no_reply(self, ended: bool) -> str | None:
+        """Why there is no reply and will be none; None while one may still come."""
+        gone = self._watch.gone() if self._watch is not None else None
+        if gone:
+            return gone
+        if self._timed_out():
+            return self._silent()
+        if not ended:
+            return None
+        if self._ended_at is None:
+            self._ended_at = time.monotonic()
+        hold_s = self._watch.hold_s() if self._watch is not None else 0.0
+        if time.monotonic() - self._ended_at < hold_s:
+            return None
+        return self._watch.unserved() if self._watch is not None else "nobody serves this key (is the world running?)"
+
+    def _timed_out(self) -> bool:
+        return self.elapsed_s >= self.timeout_s * 0.99  # Zenoh ends a query at its deadline, give or take
+
+    def _silent(self) -> str:
+        if self._watch is None:
+            return f"no reply within {self.timeout_s:.1f} s"
+        return self._watch.silent(self.timeout_s)
 
     def wait(self, check_s: float = 0.05) -> Message:
         """Block until the reply (for command-line tools and tests, never inside a tree tick).
@@ -259,7 +318,10 @@ class PendingReply:
             QueryFailed: there will be no reply.
         """
         while (message := self.poll()) is None:
-            self._arrived.wait(check_s)
+            if self._arrived.is_set():  # ended without a reply: the watch is being waited on
+                time.sleep(check_s)
+            else:
+                self._arrived.wait(check_s)
         return message
 
 
@@ -269,7 +331,7 @@ def call(
     meta: dict[str, Any] | None = None,
     arrays: Arrays | None = None,
     timeout_s: float = 10.0,
-    gone: Callable[[], str | None] | None = None,
+    watch: ServerWatch | None = None,
 ) -> Message:
     """Send one command and wait for its reply.
 
@@ -279,7 +341,7 @@ def call(
         meta: its metadata.
         arrays: its arrays.
         timeout_s: how long the reply may take.
-        gone: says why the server is gone, if it is.
+        watch: what the client knows of the server (`PendingReply`).
 
     Returns:
         The reply.
@@ -287,4 +349,4 @@ def call(
     Raises:
         QueryFailed: there will be no reply.
     """
-    return PendingReply(session, key, meta, arrays, timeout_s, gone).wait()
+    return PendingReply(session, key, meta, arrays, timeout_s, watch).wait()

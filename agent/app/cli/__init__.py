@@ -5,12 +5,32 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
+import signal
 import sys
+import threading
+from types import FrameType
 
-from worlds.bus.session import EndpointError
-from agent.app.cli import bench, calibrate, eval, inspect, replay, run, skills, suite, watch
-from agent.app.cli.options import INTERRUPTED
-from agent.app.config import ConfigError
+
+def _interrupted_while_loading(signum: int, frame: FrameType | None) -> None:
+    """Ctrl-C while the commands' modules load: nothing has started yet, so end at once, quietly
+    (a KeyboardInterrupt would stop an import half way and print its traceback)."""
+    sys.stderr.write("\nhomebot: interrupted (Ctrl-C) while starting\n")
+    os._exit(128 + signal.SIGINT)
+
+
+_LOADING = threading.current_thread() is threading.main_thread() and \
+    signal.getsignal(signal.SIGINT) is signal.default_int_handler
+if _LOADING:
+    signal.signal(signal.SIGINT, _interrupted_while_loading)
+
+from worlds.bus.session import EndpointError  # noqa: E402 (after the Ctrl-C handler above)
+from agent.app.cli import bench, calibrate, eval, inspect, replay, run, skills, suite, watch  # noqa: E402
+from agent.app.cli.options import INTERRUPTED  # noqa: E402
+from agent.app.config import ConfigError  # noqa: E402
+
+if _LOADING:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 #: Commands with a parser of their own, handed the words after their name: command -> (the module
 #: whose ``main(argv)`` runs it, the help line shown here).

@@ -27,9 +27,9 @@ from typing import Any
 from worlds.bus.keys import check_namespace
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
-from agent.app.runtime.pool import quiet_worker, stop_workers
+from agent.app.runtime.pool import quiet_worker, sigint_held, stop_workers
 from agent.app.runtime.run import RunError, RunRequest, run_episode
-from agent.app.runtime.world_process import WorldProcess
+from agent.app.runtime.world_process import WorldProcess, WorldStartError
 
 log = logging.getLogger(__name__)
 
@@ -136,9 +136,10 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         max_workers=len(worlds) if worlds else workers, mp_context=context, initializer=_start_worker_world,
         initargs=(base_config, addresses if worlds else None),
     ) as pool:
-        pending = {pool.submit(_run_job, job, base_config, recordings) for job in todo}
         finished = 0
         try:
+            with sigint_held():
+                pending = {pool.submit(_run_job, job, base_config, recordings) for job in todo}
             while pending:
                 complete, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for future in complete:
@@ -205,11 +206,13 @@ class WorkerWorld:
         namespace: the key prefix the world serves under.
         endpoint: the Zenoh endpoint the world listens on.
         scratch: where the worker's episodes put their run folders.
+        process: the world child process of its own; None for a world it joined.
     """
 
     namespace: str
     endpoint: str
     scratch: Path
+    process: WorldProcess | None = None
 
 
 #: This process's world while it is a pool worker of `run_jobs`: set once by the pool's initializer
@@ -234,7 +237,7 @@ def _start_worker_world(config: Config, addresses: Any | None) -> None:
     world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log",
                          zenoh_config=config.bus.zenoh_config)
     atexit.register(world.stop)
-    _worker_world = WorkerWorld(namespace, endpoint, scratch)
+    _worker_world = WorkerWorld(namespace, endpoint, scratch, world)
 
 
 def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> dict[str, Any]:
@@ -249,8 +252,10 @@ def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> d
                          namespace=world.namespace, run_id=f"{job.entry_id}-{job.variant}",
                          scenario=job.scenario, save_map=False, record=recordings is not None)
     try:
+        if world.process is not None:  # it may still be starting, or have ended since the last episode
+            world.process.wait_listening(config.bus.world_start_timeout_s)
         result = run_episode(request)
-    except RunError as error:
+    except (RunError, WorldStartError) as error:
         result = {"status": "failed", "reason": str(error), "step_scores": []}
     return {
         "id": job.entry_id,

@@ -10,6 +10,7 @@ listens nowhere connects to the world instead).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,7 +21,12 @@ from agent.app.runtime.request import DEFAULT_NAMESPACE, RunRequest, new_run_id
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
 from worlds.bus.keys import Keys, check_namespace
 from worlds.bus.link import WorldLink
+from worlds.bus.liveness import describe_worlds, refused
 from worlds.bus.session import free_tcp_endpoint, unreached
+
+#: How long a joined world's token may take to show once its endpoint accepts connections, before
+#: the worlds visible there are taken to be all there is (a namespace that none of them serves).
+JOIN_SETTLE_S = 2.0
 
 
 @dataclass
@@ -81,9 +87,13 @@ class EpisodeBus:
         prepared = request.seed if request.scenario is None and request.scene is None else None
         self.world = WorldProcess(self.namespace, self.endpoint, request.config.camera, self.folder / "world.log",
                                   self.listen, prepared, request.config.bus.zenoh_config)
+        self.link.follow_process(self.world.process.poll)
 
     def wait_ready(self, timeout_s: float) -> None:
         """Wait until the world's liveliness token is there.
+
+        A joined world that cannot be there is reported within seconds: nothing listens at its
+        endpoint, or the worlds there serve under other namespaces (named).
 
         Args:
             timeout_s: how long to wait.
@@ -94,9 +104,31 @@ class EpisodeBus:
         """
         if self.world is not None:
             self.world.wait_ready(self.link, timeout_s)
-        elif not self.link.liveness.wait_alive(timeout_s):
-            why = "".join(f"; {reason}" for reason in unreached(self.session, [self.endpoint]))
-            raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}{why}")
+            return
+        started = time.monotonic()
+        probed = False
+        while not self.link.liveness.wait_alive(0.2):
+            waited = time.monotonic() - started
+            if not probed:
+                probed = True
+                if (reason := refused(self.endpoint)) is not None:
+                    raise WorldStartError(f"no world answers under {self.namespace!r}: {reason}")
+            others = self.link.liveness.others() if waited >= JOIN_SETTLE_S else []
+            if others or waited >= timeout_s:
+                within = "" if others else f" within {timeout_s:g} s"
+                why = "" if others else "".join(f"; {reason}" for reason in unreached(self.session, [self.endpoint]))
+                raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}{within}: "
+                                      f"{describe_worlds(others)}{why}")
+
+    def world_log(self) -> str:
+        """The end of the log of the world started here, when it has ended; to close a message with.
+
+        Returns:
+            A newline and the end of its log, or "" when no world was started here or it still runs.
+        """
+        if self.world is None or self.world.process.poll() is None:
+            return ""
+        return f"\n{self.world.describe_log()}"
 
     def close(self) -> None:
         """Stop the world spawned here, withdraw the token and close the session."""

@@ -5,10 +5,11 @@ CPU; results are wanted as each finishes, so that they can be appended and shown
 are spawned, never forked: the caller may hold threads, Zenoh sessions or PyBullet clients that a
 fork would copy in a broken state.
 
-Ctrl-C is the caller's to handle: workers ignore SIGINT, and on it the caller cancels the calls not
-yet started and ends the running ones (SIGTERM, which a worker turns into SystemExit so that its
-cleanup, a world child's shutdown included, runs; SIGKILL for one that does not end within a few
-seconds), keeping what finished.
+Ctrl-C is the caller's to handle: workers ignore SIGINT (they are spawned with it blocked, so one
+that comes while they start and import waits until `quiet_worker` ignores it), and on it the caller
+cancels the calls not yet started and ends the running ones (SIGTERM, which a worker turns into
+SystemExit so that its cleanup, a world child's shutdown included, runs; SIGKILL for one that does
+not end within a few seconds), keeping what finished.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import os
 import signal
 import time
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
@@ -53,7 +55,8 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
     pool = ProcessPoolExecutor(min(workers, len(calls)), mp_context=multiprocessing.get_context("spawn"),
                                initializer=quiet_worker)
     try:
-        pending = {pool.submit(function, *arguments): arguments for arguments in calls}
+        with sigint_held():
+            pending = {pool.submit(function, *arguments): arguments for arguments in calls}
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -70,7 +73,22 @@ def quiet_worker() -> None:
     world child's shutdown among them) and end the process. Not by SystemExit: the pool's worker
     loop catches that as the call's error and would go on serving."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # spawned with it blocked: `sigint_held`
     signal.signal(signal.SIGTERM, _end_worker)
+
+
+@contextmanager
+def sigint_held() -> Iterator[None]:
+    """Block SIGINT in this thread while a pool spawns its workers (they spawn on submit): a
+    worker inherits the block, so a Ctrl-C that comes while it starts and imports waits until
+    `quiet_worker` ignores it, instead of raising KeyboardInterrupt in the middle of an import and
+    printing its traceback. Here the signal comes when the block lifts, or at once through
+    another thread of this process."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _end_worker(*_: object) -> None:

@@ -90,9 +90,10 @@ def run_episode(request: RunRequest, timer: StageTimer | None = None,
         outcome, world_map, trajectory = _run_tree(bus.run_id, scenario, reset.meta, config, vlm, stopping, link,
                                                    bus.session, Keys(bus.namespace), folder, timer,
                                                    extra_sinks or [], plugged, recorder, first_observation)
-        evaluation = _episode_report(link, config.bus.query_timeout_s)
+        evaluation = _episode_report(link, config.bus.query_timeout_s) if _world_may_report(outcome, link) else None
     except (WorldStartError, QueryFailed, KeyError, VLMError, CalibrationError, PlugError) as error:
-        reason = f"the episode could not start: {error}"
+        ended = "" if isinstance(error, WorldStartError) else bus.world_log()  # a start error says it already
+        reason = f"the episode could not start: {error}{ended}"
         result.update({"status": "failed", "reason": reason, "correct": False})
         write_json_atomic(folder / "result.json", result)
         raise RunError(f"{reason}\n(run folder: {folder})") from None
@@ -200,6 +201,12 @@ def _recorder(request: RunRequest, path: Path, run_id: str) -> Recorder | None:
     except Exception:
         log.exception("no recording of this episode: %s could not be opened", path)
         return None
+
+
+def _world_may_report(outcome: EpisodeOutcome, link: WorldLink) -> bool:
+    """Whether to ask the world for its report: not when it is gone, nor after Ctrl-C (which a
+    world started here had too, and which ends the command in moments)."""
+    return outcome.status != "interrupted" and link.liveness.gone() is None
 
 
 def _episode_report(link: WorldLink, timeout_s: float) -> dict[str, Any] | None:

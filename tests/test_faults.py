@@ -1,0 +1,147 @@
+"""Faults reported as they are, by a real `homebot run` against a real world process over Zenoh on
+loopback: a world killed mid-episode or at start-up is gone (with its exit code, and at start-up the
+end of its log), a frozen one is alive but silent, and joining a world that is not there says why
+within seconds: nothing listens at the port, or the worlds there serve under other namespaces."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from worlds.bus.keys import Keys
+from worlds.bus.liveness import LivenessWatch
+from worlds.bus.session import free_tcp_endpoint, open_session
+
+pytestmark = pytest.mark.slow
+
+#: Longer than any test here may take: a start-up timeout a fault must not wait out.
+NEVER_S = "600"
+
+#: This checkout, ahead of any installed copy, for the processes the tests start.
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parent.parent),
+                                                                os.environ.get("PYTHONPATH")]))}
+
+
+def _run(tmp_path: Path, *args: str) -> subprocess.Popen:
+    """`homebot run` in its own process group, listening on a free port, its folders under ``tmp_path``."""
+    return subprocess.Popen([sys.executable, "-m", "agent.app.cli", "run", "--out", str(tmp_path / "runs"),
+                             "--listen", free_tcp_endpoint(), "--set", f"bus.world_start_timeout_s={NEVER_S}", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True, env=ENV)
+
+
+def _world_of(run: subprocess.Popen, timeout_s: float = 120.0) -> psutil.Process:
+    """The world child process ``run`` started, as soon as it is there."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        assert run.poll() is None, run.communicate()[1][-2000:]
+        for child in psutil.Process(run.pid).children():
+            try:
+                if "worlds.server" in child.cmdline():
+                    return child
+            except psutil.NoSuchProcess:
+                continue
+        time.sleep(0.005)
+    raise AssertionError("the run started no world")
+
+
+def _mid_episode(run: subprocess.Popen, tmp_path: Path, timeout_s: float = 240.0) -> None:
+    """Wait until ``run``'s tree has published a few snapshots: the episode is under way."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        assert run.poll() is None, run.communicate()[1][-2000:]
+        logs = list((tmp_path / "runs").glob("*/snapshots.jsonl"))
+        if logs and len(logs[0].read_text().splitlines()) >= 3:
+            return
+        time.sleep(0.1)
+    raise AssertionError("the episode never got under way")
+
+
+def _ended(run: subprocess.Popen, timeout_s: float = 60.0) -> tuple[int, str]:
+    """``run``'s exit code and stderr; it must end well within ``timeout_s``."""
+    try:
+        _, stderr = run.communicate(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        os.killpg(run.pid, signal.SIGKILL)
+        raise AssertionError(f"the run did not end within {timeout_s:g} s") from None
+    return run.returncode, stderr
+
+
+def _result(tmp_path: Path) -> dict:
+    [path] = (tmp_path / "runs").glob("*/result.json")
+    return json.loads(path.read_text())
+
+
+def test_a_world_killed_mid_episode_is_gone_and_the_run_ends(tmp_path: Path) -> None:
+    run = _run(tmp_path, "--seed", "0")
+    world = _world_of(run)
+    _mid_episode(run, tmp_path)
+    world.kill()
+    code, stderr = _ended(run)
+    gone = "the world process is gone (it was killed by SIGKILL (exit code -9))"
+    assert code == 1 and gone in stderr and "Traceback" not in stderr, stderr
+    result = _result(tmp_path)
+    assert result["status"] == "failed" and gone in result["reason"], result["reason"]
+
+
+def test_a_frozen_world_is_alive_but_did_not_answer(tmp_path: Path) -> None:
+    run = _run(tmp_path, "--seed", "0", "--set", "bus.query_timeout_s=3", "--set", "bus.move_timeout_s=3")
+    world = _world_of(run)
+    _mid_episode(run, tmp_path)
+    world.suspend()
+    try:
+        code, stderr = _ended(run)
+    finally:
+        if world.is_running():
+            world.resume()
+    assert code == 1 and "Traceback" not in stderr, stderr
+    reason = _result(tmp_path)["reason"]
+    assert "the world is alive but did not answer within 3.0 s" in reason and "nobody serves" not in reason, reason
+    assert not world.is_running() or world.status() == psutil.STATUS_ZOMBIE, "the stopped world was left behind"
+
+
+def test_a_world_killed_at_start_up_leaves_its_exit_code_and_its_log(tmp_path: Path) -> None:
+    run = _run(tmp_path, "--seed", "0")
+    _world_of(run).kill()  # while it still imports: before it could announce itself
+    code, stderr = _ended(run)
+    assert code == 1 and "Traceback" not in stderr, stderr
+    assert "the episode could not start: the world process ended before it came up: it was killed by SIGKILL " \
+           "(exit code -9)" in stderr, stderr
+    tail = stderr.split("the end of its log", 1)[1]
+    assert "-m worlds.server --namespace" in tail and "(the world wrote nothing before it ended)" in tail, tail
+    assert "SIGKILL" in _result(tmp_path)["reason"]
+
+
+def test_joining_a_port_nobody_listens_on_is_connection_refused(tmp_path: Path) -> None:
+    endpoint = free_tcp_endpoint()
+    run = _run(tmp_path, "--connect", endpoint)
+    code, stderr = _ended(run)
+    assert code == 1 and "Traceback" not in stderr, stderr
+    assert f"connection refused at {endpoint}" in stderr, stderr
+    assert f"connection refused at {endpoint}" in _result(tmp_path)["reason"]
+
+
+def test_joining_under_a_namespace_no_world_serves_names_the_visible_worlds(tmp_path: Path) -> None:
+    endpoint = free_tcp_endpoint()
+    world = subprocess.Popen([sys.executable, "-m", "worlds.server", "--namespace", "homebot/elsewhere",
+                              "--listen", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENV)
+    try:
+        with open_session(connect=[endpoint]) as session:
+            watch = LivenessWatch(session, Keys("homebot/elsewhere").world_alive)
+            assert watch.wait_alive(120.0), "the world never came up"
+            watch.close()
+        run = _run(tmp_path, "--connect", endpoint, "--namespace", "homebot/here")
+        code, stderr = _ended(run)
+    finally:
+        world.terminate()
+        world.wait(30)
+    assert code == 1 and "Traceback" not in stderr, stderr
+    assert f"no world answers under 'homebot/here' at {endpoint}: the worlds visible serve under " \
+           "'homebot/elsewhere'" in stderr, stderr
