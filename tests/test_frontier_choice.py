@@ -70,8 +70,8 @@ def test_same_seed_same_choices() -> None:
 
 @pytest.mark.parametrize("override, field", [
     ("explore.choice.rule=nearest", "frontier_choice.rule"),
-    ("explore.choice.distance_cost_per_m=-1", "frontier_choice.distance_cost_per_m"),
-    ("explore.choice.switch_margin=NaN", "frontier_choice.switch_margin"),
+    ("explore.choice.distance_cost_per_m=-1", "explore.choice.distance_cost_per_m"),
+    ("explore.choice.switch_margin=NaN", "explore.choice.switch_margin"),
 ])
 def test_bad_settings_are_refused_by_name(override: str, field: str) -> None:
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
