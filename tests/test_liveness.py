@@ -27,7 +27,7 @@ def test_a_server_whose_session_closes_is_gone_not_unserved(bus: Bus) -> None:
     watch = WorldWatch(agent, keys)
     try:
         token = dying.liveliness().declare_token(keys.world_alive)  # noqa: F841 (dropped with the session)
-        server = CommandServer(dying)
+        server = CommandServer(dying, bus.namespace)
         server.add(keys.world_cmd("observe"), echo)  # declared, never served
         assert watch.wait_alive(5.0)
         time.sleep(PROPAGATE_S)
@@ -47,7 +47,7 @@ def test_a_live_world_that_does_not_answer_in_time_is_alive_but_silent(bus: Bus)
     keys = Keys(bus.namespace)
     watch = WorldWatch(bus.client_session, keys)
     token = bus.server_session.liveliness().declare_token(keys.world_alive)
-    server = CommandServer(bus.server_session)
+    server = CommandServer(bus.server_session, bus.namespace)
     server.add(keys.world_cmd("observe"), echo)  # declared, never served
     try:
         assert watch.wait_alive(5.0)
