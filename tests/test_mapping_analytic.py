@@ -99,7 +99,7 @@ def test_cell_centres_lie_on_the_voxel_lattice() -> None:
         assert np.allclose(offsets, np.round(offsets), atol=1e-9), f"cell centres off the lattice for {start}"
 
 
-@pytest.mark.parametrize("value, problem", [("0", "whole multiple"), ("0.05", "whole multiple"), ("0.15", "whole multiple")])
+@pytest.mark.parametrize("value, problem", [("0", r"must lie in \(0, 10\]"), ("0.05", "whole multiple"), ("0.15", "whole multiple")])
 def test_a_map_resolution_that_splits_voxels_is_refused_by_name(value: str, problem: str) -> None:
     with pytest.raises(ConfigError, match=rf"map\.resolution.*{problem}"):
         load_config(None, [f"map.resolution={value}"])
