@@ -169,3 +169,15 @@ def test_an_evaluation_whose_world_is_killed_fails_that_episode_and_goes_on_in_a
     results = {line["id"]: line for line in map(json.loads, (out / "explore-results.jsonl").read_text().splitlines())}
     assert "the world process is gone (it was killed by SIGKILL (exit code -9))" in results["suite-0000"]["reason"]
     assert results["suite-0001"]["status"] == results["suite-0002"]["status"] == "answered", results
+
+
+def test_the_faults_bench_reports_each_fault_with_its_reason() -> None:
+    bench = subprocess.run([sys.executable, "-m", "agent.app.cli", "bench", "faults", "--repeats", "1", "--json"],
+                           capture_output=True, text=True, timeout=600, env=ENV)
+    assert bench.returncode == 0, bench.stderr[-2000:]
+    reasons = {name: row["reason"] for name, row in json.loads(bench.stdout)["faults"].items()}
+    assert "the world process is gone (it was killed by SIGKILL" in reasons["killed"]
+    assert "the world is alive but did not answer within 2.0 s" in reasons["frozen"]
+    assert "connection refused at tcp/127.0.0.1:" in reasons["closed port"]
+    assert "the worlds visible serve under 'homebot/bench-elsewhere'" in reasons["other namespace"]
+    assert reasons["ctrl-c run"].startswith("exit code 130: homebot run: interrupted")

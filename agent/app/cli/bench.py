@@ -1,4 +1,5 @@
-"""`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world."""
+"""`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world, and how
+soon faults are reported."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, loa
 
 
 def add_command(commands: Commands) -> None:
-    """Add ``bench`` and its four benchmarks with their options.
+    """Add ``bench`` and its five benchmarks with their options.
 
     Args:
         commands: the `homebot` parser's commands.
@@ -43,6 +44,23 @@ def add_command(commands: Commands) -> None:
     world.add_argument("--repeats", type=int, default=3, help="homes per area (default 3)")
     world.add_argument("--json", action="store_true", help="print the figures as JSON")
     world.set_defaults(handler=_bench_world)
+    faults = benches.add_parser("faults", help="seconds until a killed or frozen world, a closed port, a namespace "
+                                               "no world serves and Ctrl-C on homebot run are reported, and how")
+    faults.add_argument("--repeats", type=int, default=3, help="times each fault is caused (default 3)")
+    faults.add_argument("--json", action="store_true", help="print the figures as JSON")
+    faults.set_defaults(handler=_bench_faults)
+
+
+def _bench_faults(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump
+    from agent.app.bench.faults import bench_faults, format_faults_table
+
+    if args.repeats < 1:
+        print(f"homebot bench faults: --repeats must be at least 1, got {args.repeats}", file=sys.stderr)
+        return 2
+    report = bench_faults(args.repeats, lambda line: print(line, file=sys.stderr, flush=True))
+    print(dump(report) if args.json else format_faults_table(report))
+    return 0
 
 
 def _bench_world(args: argparse.Namespace) -> int:
