@@ -38,11 +38,11 @@ def _run(tmp_path: Path, *args: str) -> subprocess.Popen:
 
 
 def _world_of(run: subprocess.Popen, timeout_s: float = 120.0) -> psutil.Process:
-    """The world child process ``run`` started, as soon as it is there."""
+    """The world process ``run`` started (or its worker did), as soon as it is there."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         assert run.poll() is None, run.communicate()[1][-2000:]
-        for child in psutil.Process(run.pid).children():
+        for child in psutil.Process(run.pid).children(recursive=True):
             try:
                 if "worlds.server" in child.cmdline():
                     return child
@@ -145,3 +145,39 @@ def test_joining_under_a_namespace_no_world_serves_names_the_visible_worlds(tmp_
     assert code == 1 and "Traceback" not in stderr, stderr
     assert f"no world answers under 'homebot/here' at {endpoint}: the worlds visible serve under " \
            "'homebot/elsewhere'" in stderr, stderr
+
+
+def test_an_evaluation_whose_world_is_killed_fails_that_episode_and_goes_on_in_a_new_world(tmp_path: Path) -> None:
+    from worlds.suite import plan_split, write_suite
+
+    suite = write_suite(tmp_path / "suite", plan_split(3, [3], 73000, ("suite",)), hidden=False)["suite"]
+    out = tmp_path / "out"
+    evaluation = subprocess.Popen([sys.executable, "-m", "agent.app.cli", "eval", "explore", "--suite", str(suite),
+                                   "--workers", "1", "--methods", "fbe", "--out", str(out), "--record",
+                                   "--listen", free_tcp_endpoint(), "--set", "episode.budget=30"],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                                  env=ENV)
+    deadline = time.monotonic() + 240
+    snapshots = out / "recordings" / "suite-0000-fbe" / "snapshots.jsonl"
+    while not snapshots.exists() or len(snapshots.read_text().splitlines()) < 3:
+        assert evaluation.poll() is None, evaluation.communicate()[1][-2000:]
+        assert time.monotonic() < deadline, "the first episode never got under way"
+        time.sleep(0.1)
+    _world_of(evaluation).kill()
+    code, stderr = _ended(evaluation, 600)
+    assert code == 0 and "Traceback" not in stderr, stderr
+    results = {line["id"]: line for line in map(json.loads, (out / "explore-results.jsonl").read_text().splitlines())}
+    assert "the world process is gone (it was killed by SIGKILL (exit code -9))" in results["suite-0000"]["reason"]
+    assert results["suite-0001"]["status"] == results["suite-0002"]["status"] == "answered", results
+
+
+def test_the_faults_bench_reports_each_fault_with_its_reason() -> None:
+    bench = subprocess.run([sys.executable, "-m", "agent.app.cli", "bench", "faults", "--repeats", "1", "--json"],
+                           capture_output=True, text=True, timeout=600, env=ENV)
+    assert bench.returncode == 0, bench.stderr[-2000:]
+    reasons = {name: row["reason"] for name, row in json.loads(bench.stdout)["faults"].items()}
+    assert "the world process is gone (it was killed by SIGKILL" in reasons["killed"]
+    assert "the world is alive but did not answer within 2.0 s" in reasons["frozen"]
+    assert "connection refused at tcp/127.0.0.1:" in reasons["closed port"]
+    assert "the worlds visible serve under 'homebot/bench-elsewhere'" in reasons["other namespace"]
+    assert reasons["ctrl-c run"].startswith("exit code 130: homebot run: interrupted")

@@ -1,5 +1,6 @@
 """`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world; the
-world's answers to malformed requests (fuzz); episodes side by side for a while (soak)."""
+world's answers to malformed requests (fuzz); episodes side by side for a while (soak); how fast
+faults are reported (faults)."""
 
 from __future__ import annotations
 
@@ -67,6 +68,12 @@ def add_command(commands: Commands) -> None:
     soak.add_argument("--json", action="store_true", help="print the report as JSON")
     soak.set_defaults(handler=_bench_soak)
 
+    faults = benches.add_parser("faults", help="seconds until a killed or frozen world, a closed port, a namespace "
+                                               "no world serves and Ctrl-C on homebot run are reported, and how")
+    faults.add_argument("--repeats", type=int, default=3, help="times each fault is caused (default 3)")
+    faults.add_argument("--json", action="store_true", help="print the figures as JSON")
+    faults.set_defaults(handler=_bench_faults)
+
 
 def _bench_fuzz(args: argparse.Namespace) -> int:
     from agent.app.bench import dump
@@ -89,6 +96,18 @@ def _bench_fuzz(args: argparse.Namespace) -> int:
         return INTERRUPTED
     print(dump(report) if args.json else format_fuzz_report(report))
     return 0 if report["crashes"] == 0 and report["hangs"] == 0 else 1
+
+
+def _bench_faults(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump
+    from agent.app.bench.faults import bench_faults, format_faults_table
+
+    if args.repeats < 1:
+        print(f"homebot bench faults: --repeats must be at least 1, got {args.repeats}", file=sys.stderr)
+        return 2
+    report = bench_faults(args.repeats, lambda line: print(line, file=sys.stderr, flush=True))
+    print(dump(report) if args.json else format_faults_table(report))
+    return 0
 
 
 def _bench_world(args: argparse.Namespace) -> int:

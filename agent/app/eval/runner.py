@@ -1,7 +1,8 @@
 """Running many episodes in parallel worker processes, appending each result as it finishes.
 
 Each worker process starts one world child process of its own and resets it per episode, so a
-world's start-up is paid once per worker, not once per episode. Given running worlds instead
+world's start-up is paid once per worker, not once per episode (a world that ends fails the episode
+it ended in, saying how, and the worker starts another for the next). Given running worlds instead
 (``homebot world`` on other machines, each named by its Zenoh endpoint), one worker joins each of
 them, so the same command spreads its episodes over several machines. Results go to a JSON-lines file,
 one line per finished episode, flushed at once; a rerun skips the (scenario, variant) pairs already
@@ -25,8 +26,10 @@ from pathlib import Path
 from typing import Any
 
 from worlds.bus.keys import check_namespace
+from worlds.bus.liveness import describe_exit
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
+from agent.app.runtime.episode_bus import EpisodeBus
 from agent.app.runtime.pool import quiet_worker, sigint_held, stop_workers
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
@@ -207,12 +210,14 @@ class WorkerWorld:
         endpoint: the Zenoh endpoint the world listens on.
         scratch: where the worker's episodes put their run folders.
         process: the world child process of its own; None for a world it joined.
+        number: which of the worker's own worlds it is (another starts when one has ended).
     """
 
     namespace: str
     endpoint: str
     scratch: Path
     process: WorldProcess | None = None
+    number: int = 1
 
 
 #: This process's world while it is a pool worker of `run_jobs`: set once by the pool's initializer
@@ -232,12 +237,33 @@ def _start_worker_world(config: Config, addresses: Any | None) -> None:
         address: WorldAddress = addresses.get(timeout=10)
         _worker_world = WorkerWorld(address.namespace, address.endpoint, scratch)
         return
-    namespace = f"homebot/eval-{os.getpid()}"
+    _worker_world = _own_world(config, f"homebot/eval-{os.getpid()}", scratch, 1)
+
+
+def _own_world(config: Config, namespace: str, scratch: Path, number: int) -> WorkerWorld:
+    """The worker's ``number``-th world child process, stopped when the worker exits; its log is
+    ``world.log`` in ``scratch``, the next ones' ``world-2.log``, …"""
     endpoint = free_tcp_endpoint()
-    world = WorldProcess(namespace, endpoint, config.camera, scratch / "world.log",
+    world = WorldProcess(namespace, endpoint, config.camera,
+                         scratch / ("world.log" if number == 1 else f"world-{number}.log"),
                          zenoh_config=config.bus.zenoh_config)
     atexit.register(world.stop)
-    _worker_world = WorkerWorld(namespace, endpoint, scratch, world)
+    return WorkerWorld(namespace, endpoint, scratch, world, number)
+
+
+def _live_world(config: Config) -> WorkerWorld:
+    """This worker's world; when its own world has ended (the episode it ended in failed, saying
+    how), another is started, so that one world's end does not fail every episode left."""
+    global _worker_world
+    world = _worker_world
+    if world is None:
+        raise RuntimeError("_run_job runs in a worker of run_jobs, whose initializer gives it its world")
+    code = world.process.process.poll() if world.process is not None else None
+    if code is not None:
+        log.warning("this worker's world ended (%s; its log: %s); starting another", describe_exit(code),
+                    world.process.log_path)
+        world = _worker_world = _own_world(config, world.namespace, world.scratch, world.number + 1)
+    return world
 
 
 def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> dict[str, Any]:
@@ -245,16 +271,17 @@ def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> d
     when given; any failure is a result with its reason, never a crash."""
     started = time.monotonic()
     config = load_config(overrides=list(job.overrides), base=base_config)
-    world = _worker_world
-    if world is None:
-        raise RuntimeError("_run_job runs in a worker of run_jobs, whose initializer gives it its world")
+    world = _live_world(base_config)
     request = RunRequest(seed=job.seed, config=config, out_root=recordings or world.scratch, connect=world.endpoint,
                          namespace=world.namespace, run_id=f"{job.entry_id}-{job.variant}",
                          scenario=job.scenario, save_map=False, record=recordings is not None)
     try:
-        if world.process is not None:  # it may still be starting, or have ended since the last episode
+        if world.process is not None:  # it may still be starting
             world.process.wait_listening(config.bus.world_start_timeout_s)
-        result = run_episode(request)
+        bus = EpisodeBus.open(request)
+        if world.process is not None:
+            bus.follow(world.process)
+        result = run_episode(request, bus=bus)
     except (RunError, WorldStartError) as error:
         result = {"status": "failed", "reason": str(error), "step_scores": []}
     return {

@@ -32,8 +32,8 @@ JOIN_SETTLE_S = 2.0
 @dataclass
 class EpisodeBus:
     """The run's id, namespace and folder, the agent's session (listening on ``listen``) and token,
-    the link to the world at ``endpoint``, the world process once it was spawned here, and the
-    request it was opened for."""
+    the link to the world at ``endpoint``, the world process once it was spawned here, the request
+    it was opened for, and a world process started elsewhere that the request joins, if followed."""
 
     run_id: str
     namespace: str
@@ -45,6 +45,7 @@ class EpisodeBus:
     link: WorldLink
     world: WorldProcess | None
     request: RunRequest
+    followed: WorldProcess | None = None
 
     @classmethod
     def open(cls, request: RunRequest) -> EpisodeBus:
@@ -89,6 +90,17 @@ class EpisodeBus:
                                   self.listen, prepared, request.config.bus.zenoh_config)
         self.link.follow_process(self.world.process.poll)
 
+    def follow(self, world: WorldProcess) -> None:
+        """Follow the world process the request joins, started elsewhere (an evaluation worker's,
+        which outlives the episode): it is waited for as a world started here is, and a world that
+        ends is reported with how it ended; it is not stopped with the bus.
+
+        Args:
+            world: the process.
+        """
+        self.followed = world
+        self.link.follow_process(world.process.poll)
+
     def wait_ready(self, timeout_s: float) -> None:
         """Wait until the world's liveliness token is there.
 
@@ -102,8 +114,9 @@ class EpisodeBus:
             agent.app.runtime.world_process.WorldStartError: the world exited, was too slow, or
                 none answers at the endpoint joined.
         """
-        if self.world is not None:
-            self.world.wait_ready(self.link, timeout_s)
+        process = self.world or self.followed
+        if process is not None:
+            process.wait_ready(self.link, timeout_s)
             return
         started = time.monotonic()
         probed = False
@@ -121,14 +134,16 @@ class EpisodeBus:
                                       f"{describe_worlds(others)}{why}")
 
     def world_log(self) -> str:
-        """The end of the log of the world started here, when it has ended; to close a message with.
+        """The end of the log of the world process started here or followed, when it has ended; to
+        close a message with.
 
         Returns:
-            A newline and the end of its log, or "" when no world was started here or it still runs.
+            A newline and the end of its log, or "" when there is no such process or it still runs.
         """
-        if self.world is None or self.world.process.poll() is None:
+        process = self.world or self.followed
+        if process is None or process.process.poll() is None:
             return ""
-        return f"\n{self.world.describe_log()}"
+        return f"\n{process.describe_log()}"
 
     def close(self) -> None:
         """Stop the world spawned here, withdraw the token and close the session."""

@@ -204,9 +204,10 @@ def _recorder(request: RunRequest, path: Path, run_id: str) -> Recorder | None:
 
 
 def _world_may_report(outcome: EpisodeOutcome, link: WorldLink) -> bool:
-    """Whether to ask the world for its report: not when it is gone, nor after Ctrl-C (which a
-    world started here had too, and which ends the command in moments)."""
-    return outcome.status != "interrupted" and link.liveness.gone() is None
+    """Whether to ask the world for its report: only while its token is there (not when it is gone,
+    or went silent), and not after Ctrl-C (which a world started here had too, and which ends the
+    command in moments)."""
+    return outcome.status != "interrupted" and link.liveness.alive and link.liveness.gone() is None
 
 
 def _episode_report(link: WorldLink, timeout_s: float) -> dict[str, Any] | None:
