@@ -114,7 +114,10 @@ def live_episode(tmp_path: Path) -> Iterator[dict[str, Any]]:
     from agent.app.runtime.run import RunRequest, run_episode
 
     endpoint, namespace = free_tcp_endpoint(), "homebot/inspect-control"
-    config = load_config(overrides=[f'bus.listen=["{endpoint}"]', "episode.budget=30", "stop.rule=budget"])
+    # paced, so the episode outlasts the page loading: a viewer that joins late sees the tree at the
+    # next full snapshot (every few seconds), and a fast episode may be over by then
+    config = load_config(overrides=[f'bus.listen=["{endpoint}"]', "episode.budget=30", "stop.rule=budget",
+                                    "episode.tick_period_s=0.05"])
     outcome: dict[str, Any] = {}
     runner = threading.Thread(target=lambda: outcome.update(run_episode(RunRequest(
         seed=3, config=config, out_root=tmp_path, namespace=namespace, run_id="inspected"))), daemon=True)
