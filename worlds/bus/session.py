@@ -21,6 +21,8 @@ from pathlib import Path
 
 import zenoh
 
+from worlds.bus.liveness import refused
+
 log = logging.getLogger(__name__)
 
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|unixsock-stream)/.+$")
@@ -177,13 +179,9 @@ def _why_unreached(endpoint: str, probe_s: float) -> str:
     match = _HOST_PORT.match(endpoint.split("?")[0].split("#")[0])
     if match is None or match["protocol"] in ("udp", "quic"):
         return f"no Zenoh session was opened with {endpoint} (nothing answers there, or its handshake failed)"
-    try:
-        with socket.create_connection((match["host"].strip("[]"), int(match["port"])), timeout=probe_s):
-            pass
-    except ConnectionRefusedError:
-        return f"connection refused at {endpoint}: nothing listens there"
-    except OSError as error:
-        return f"{endpoint} cannot be reached: {error.strerror or error}"
+    reason = refused(f"tcp/{match['host']}:{match['port']}", probe_s)
+    if reason is not None:
+        return reason.replace(f"tcp/{match['host']}:{match['port']}", endpoint)
     if match["protocol"] == "tls":
         return (f"{endpoint} took the connection but opened no Zenoh session: the TLS handshake failed "
                 "(the listener refused this side's certificate, or this side does not trust the "
