@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import zenoh
 
-from agent.app.bench.fuzz import bench_fuzz, classify
+from agent.app.bench.fuzz import WARM_UP, bench_fuzz, classify, format_fuzz_report
 from worlds.bus.codec import MAGIC, Message, decode, encode
 from worlds.bus.keys import Keys
 from worlds.bus.liveness import LivenessWatch
@@ -272,6 +272,24 @@ def test_a_fuzz_run_crashes_nothing_hangs_nothing_and_every_refusal_names_its_fi
     assert report["outcomes"]["named"] == 400, report["examples"]
     assert report["log"]["tracebacks"] == 0
     assert report["log"]["rejection_lines"] + report["log"]["rejections_counted_not_logged"] <= 400
+
+
+def _fuzz_report(memory: list[tuple[int, float, float]]) -> dict:
+    return {"sent": memory[-1][0], "messages": memory[-1][0], "seed": 0, "seconds": 1.0, "per_second": 1.0,
+            "by_kind": {}, "outcomes": {o: 0 for o in ("named", "unnamed", "internal", "busy", "accepted", "hang")},
+            "crashes": 0, "hangs": 0, "failed_health_checks": 0, "examples": {},
+            "memory": [{"sent": n, "rss_mib": rss, "peak_mib": rss, "anon_mib": own} for n, rss, own in memory],
+            "log": {"bytes": 0, "lines": 0, "tracebacks": 0, "rejection_lines": 0, "rejections_counted_not_logged": 0}}
+
+
+def test_the_fuzz_memory_target_is_judged_from_after_the_warm_up_on_the_larger_growth() -> None:
+    def target(memory: list[tuple[int, float, float]]) -> str:
+        return next(line for line in format_fuzz_report(_fuzz_report(memory)).splitlines() if line.startswith("target"))
+
+    warm_up_cost = [(0, 100.0, 80.0), (WARM_UP, 130.0, 90.0)]
+    assert target(warm_up_cost + [(10 * WARM_UP, 140.0, 95.0)]).endswith("+7.7 % (the larger of RSS and own memory): met")
+    assert target(warm_up_cost + [(10 * WARM_UP, 131.0, 100.0)]).endswith("+11.1 % (the larger of RSS and own memory): NOT met")
+    assert target([(0, 100.0, 80.0), (500, 101.0, 81.0)]).endswith("n/a (send more than 1000)")
 
 
 def test_replies_are_sorted_by_what_they_say() -> None:

@@ -3,8 +3,8 @@
 A world announces itself with a liveliness token (``<ns>/world/alive``). `LivenessWatch` follows one
 token. `WorldWatch` follows the token of the world an agent talks to, the world's process when the
 agent started it, and the other worlds its session can see, and turns what it knows into the
-reason a query failed: the world process is gone (its token dropped; with the process's exit code
-when the agent holds it), the world is alive but did not answer in time (frozen, or too busy), or
+reason a query failed: the world is gone (its token dropped; with the process's exit code when
+the agent holds it), the world is alive but did not answer in time (frozen, or too busy), or
 no world serves under the namespace (with the namespaces of the worlds that are visible).
 """
 
@@ -75,7 +75,10 @@ class LivenessWatch:
         """
         if not self.lost:
             return None
-        return f"the world process is gone (its liveliness token {self.key} was dropped)"
+        # From the token alone an ended process and one frozen or cut off for longer than the
+        # session's lease look the same: both drop the token.
+        return (f"the world is gone from the bus (its liveliness token {self.key} was dropped: its process ended, "
+                "or was frozen or cut off for longer than the Zenoh lease, 10 s by default)")
 
     def wait_alive(self, timeout_s: float) -> bool:
         """Wait until the token is present, at most ``timeout_s``; return as soon as it comes.

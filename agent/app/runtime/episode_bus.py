@@ -25,8 +25,10 @@ from worlds.bus.liveness import describe_worlds, refused
 from worlds.bus.session import free_tcp_endpoint, unreached
 
 #: How long a joined world's token may take to show once its endpoint accepts connections, before
-#: the worlds visible there are taken to be all there is (a namespace that none of them serves).
-JOIN_SETTLE_S = 2.0
+#: the worlds visible there are taken to be all there is (a namespace that none of them serves). A
+#: world announces itself once its first home is built, 1–2 s after it starts on an idle machine;
+#: the margin keeps a world still starting beside others from being reported as absent.
+JOIN_SETTLE_S = 4.0
 
 
 @dataclass
