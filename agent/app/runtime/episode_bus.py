@@ -28,7 +28,7 @@ from worlds.bus.session import free_tcp_endpoint, unreached
 #: the worlds visible there are taken to be all there is (a namespace that none of them serves). A
 #: world announces itself once its first home is built, 1–2 s after it starts on an idle machine;
 #: the margin keeps a world still starting beside others from being reported as absent.
-JOIN_SETTLE_S = 4.0
+JOIN_SETTLE_S = 3.0
 
 
 @dataclass
