@@ -128,6 +128,36 @@ def test_joining_a_port_nobody_listens_on_is_connection_refused(tmp_path: Path) 
     assert f"connection refused at {endpoint}" in _result(tmp_path)["reason"]
 
 
+def test_a_port_that_opens_while_the_join_settles_is_waited_for_not_refused(tmp_path: Path) -> None:
+    """A world started beside its agent may open its port a moment after the agent first looks: a
+    refused connection is final only once it has lasted `JOIN_SETTLE_S`."""
+    import socket
+    import threading
+
+    from agent.app.config import load_config
+    from agent.app.runtime.episode_bus import JOIN_SETTLE_S, EpisodeBus
+    from agent.app.runtime.request import RunRequest
+    from agent.app.runtime.world_process import WorldStartError
+
+    endpoint = free_tcp_endpoint()
+    port = int(endpoint.rsplit(":", 1)[1])
+    listener = socket.socket()
+    listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    opener = threading.Timer(JOIN_SETTLE_S / 3, lambda: (listener.bind(("127.0.0.1", port)), listener.listen()))
+    config = load_config(overrides=[f"bus.listen=[\"{free_tcp_endpoint()}\"]"])
+    bus = EpisodeBus.open(RunRequest(seed=0, config=config, out_root=tmp_path, connect=endpoint))
+    try:
+        opener.start()
+        with pytest.raises(WorldStartError) as raised:
+            bus.wait_ready(JOIN_SETTLE_S + 1.0)  # a plain socket, not a world: no token ever comes
+    finally:
+        opener.join()
+        bus.close()
+        listener.close()
+    assert "connection refused" not in str(raised.value)
+    assert f"no world answers under 'homebot/default' at {endpoint} within" in str(raised.value)
+
+
 def test_joining_under_a_namespace_no_world_serves_names_the_visible_worlds(tmp_path: Path) -> None:
     endpoint = free_tcp_endpoint()
     world = subprocess.Popen([sys.executable, "-m", "worlds.server", "--namespace", "homebot/elsewhere",

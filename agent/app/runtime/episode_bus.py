@@ -24,10 +24,11 @@ from worlds.bus.link import WorldLink
 from worlds.bus.liveness import describe_worlds, refused
 from worlds.bus.session import free_tcp_endpoint, unreached
 
-#: How long a joined world's token may take to show once its endpoint accepts connections, before
-#: the worlds visible there are taken to be all there is (a namespace that none of them serves). A
-#: world announces itself once its first home is built, 1–2 s after it starts on an idle machine;
-#: the margin keeps a world still starting beside others from being reported as absent.
+#: How long a joined endpoint may refuse connections before nothing is taken to listen there (a world
+#: started a moment ago opens its port once its imports are done), and how long a joined world's
+#: token may take to show once its endpoint accepts connections, before the worlds visible there are
+#: taken to be all there is (a namespace that none of them serves). A world announces itself once
+#: its first home is built, 1–2 s after it starts on an idle machine.
 JOIN_SETTLE_S = 3.0
 
 
@@ -121,15 +122,20 @@ class EpisodeBus:
             process.wait_ready(self.link, timeout_s)
             return
         started = time.monotonic()
-        probed = False
+        listening_since: float | None = None
         while not self.link.liveness.wait_alive(0.2):
-            waited = time.monotonic() - started
-            if not probed:
-                probed = True
-                if (reason := refused(self.endpoint)) is not None:
+            now = time.monotonic()
+            if listening_since is None:
+                # a world started a moment ago may not listen yet: a refused connection is final
+                # only once it has lasted the settling time; any other reason is final at once
+                reason = refused(self.endpoint)
+                if reason is None:
+                    listening_since = now
+                elif now - started >= JOIN_SETTLE_S or not reason.startswith("connection refused"):
                     raise WorldStartError(f"no world answers under {self.namespace!r}: {reason}")
-            others = self.link.liveness.others() if waited >= JOIN_SETTLE_S else []
-            if others or waited >= timeout_s:
+            settled = listening_since is not None and now - listening_since >= JOIN_SETTLE_S
+            others = self.link.liveness.others() if settled else []
+            if others or now - started >= timeout_s:
                 within = "" if others else f" within {timeout_s:g} s"
                 why = "" if others else "".join(f"; {reason}" for reason in unreached(self.session, [self.endpoint]))
                 raise WorldStartError(f"no world answers under {self.namespace!r} at {self.endpoint}{within}: "
