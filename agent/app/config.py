@@ -92,6 +92,16 @@ class TreeSettings:
 
 
 @dataclass(frozen=True)
+class RaySettings:
+    """What an evaluation's episode asks of a Ray cluster (``--ray``, docs/scale.md): the CPUs it
+    uses, its agent's process and the world process it starts beside it together. Ray starts no
+    more episodes on a node than its CPUs hold, so the figure is what keeps a node from being
+    oversubscribed; a fraction is allowed (1.5: a world that mostly waits on its agent)."""
+
+    cpus_per_episode: float = 2.0
+
+
+@dataclass(frozen=True)
 class Config:
     """Every setting of a run, one section per part of the agent; ``[section]`` in TOML, ``section.key`` with --set."""
 
@@ -107,6 +117,7 @@ class Config:
     stop: StopConfig = field(default_factory=StopConfig)
     act: LookInsideConfig = field(default_factory=LookInsideConfig)
     tree: TreeSettings = field(default_factory=TreeSettings)
+    ray: RaySettings = field(default_factory=RaySettings)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:

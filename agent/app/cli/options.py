@@ -2,6 +2,7 @@
 
 The commands that run episodes take settings (`--config`, `--set`, `--listen`); those that run a
 suite's episodes in worker processes take the suite, the workers and where the worlds are as well.
+The commands that hand out many episodes or homes can hand them to a Ray cluster (`add_ray_option`).
 A number an option takes is checked as the command line is parsed (`seed_option`, `count_option`,
 `seconds_option`), so a value no run could use is refused, naming the option, before any world starts.
 """
@@ -14,6 +15,7 @@ import math
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from agent.app.config import Config, ConfigError, load_config
 from agent.app.config_bounds import MAX_SEED
@@ -92,6 +94,41 @@ def add_suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: s
     parser.add_argument("--worlds", metavar="ENDPOINTS",
                         help="join running worlds instead of starting one per worker: comma-separated "
                              "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each)")
+    add_ray_option(parser, "episode", "its world")
+
+
+def add_ray_option(parser: argparse.ArgumentParser, call: str, beside: str = "") -> None:
+    """Give a command that hands out many calls (episodes, scenes, homes) ``--ray [ADDRESS]``: each
+    call a Ray task instead of a call in a local worker process. Given where Ray is not installed,
+    the option is refused at once, saying how to install it.
+
+    Args:
+        parser: the command's parser.
+        call: what one call is, for the help text ("episode", "home").
+        beside: what a task starts beside its call, for the help text ("" for nothing).
+    """
+    from agent.app.runtime.ray_backend import LOCAL
+
+    starts = f" that starts {beside} on the node it lands on" if beside else ""
+    parser.add_argument("--ray", nargs="?", const=LOCAL, default=None, metavar="ADDRESS", action=_RayOption,
+                        help=f"run each {call} as a Ray task{starts}: on a local Ray cluster started for "
+                             f"this command (--workers {call}s at once), or on the cluster at ADDRESS "
+                             "(auto: the one this machine joined with `ray start`; HOST:6379: its head) "
+                             "(docs/scale.md; pip install 'homebot[ray]')")
+
+
+class _RayOption(argparse.Action):
+    """``--ray [ADDRESS]``, refused as it is parsed when the ray package is missing."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        from agent.app.runtime.ray_backend import RayError, ray_module
+
+        try:
+            ray_module()
+        except RayError as error:
+            parser.error(str(error))
+        setattr(namespace, self.dest, values)
 
 
 def load_settings(args: argparse.Namespace) -> Config:
@@ -137,7 +174,8 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
     """The settings of a suite run (workers need no watcher endpoint), or None after a clear message.
 
     Also checks ``--worlds``, leaving the parsed addresses in
-    ``args.world_addresses`` (None without ``--worlds``).
+    ``args.world_addresses`` (None without ``--worlds``), and refuses it with ``--ray``: a Ray task
+    starts its world beside its agent on the node it lands on.
 
     Args:
         args: the parsed command line of a command given `add_suite_run_options`.
@@ -154,6 +192,10 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
         args.world_addresses = [WorldAddress.parse(w) for w in args.worlds.split(",") if w.strip()] if args.worlds else None
     except ValueError as error:
         print(f"homebot: --worlds: {error}", file=sys.stderr)
+        return None
+    if args.world_addresses and args.ray is not None:
+        print("homebot: --ray and --worlds cannot be used together: each Ray task starts its own world on the "
+              "node it lands on; to join running worlds, leave out --ray (docs/scale.md)", file=sys.stderr)
         return None
     return _zenoh_checked(load_config(args.config, [*args.set, *_zenoh_override(args), "bus.listen=[]"]))
 
