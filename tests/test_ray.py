@@ -1,7 +1,7 @@
 """Evaluations on a Ray cluster (``--ray``): the same records as the process pool, a run stopped
 part-way resumes without redoing what finished, a task whose worker is killed mid-episode is run
-again and recorded once, and no world is left behind. The tests share one local cluster of two
-CPUs, its files in a temporary folder."""
+again and recorded once, tasks join running worlds one at a time, and no world is left behind.
+The tests share one local cluster of two CPUs, its files in a temporary folder."""
 
 from __future__ import annotations
 
@@ -24,11 +24,12 @@ from agent.app.cli import main
 from agent.app.config import Config, load_config
 from agent.app.eval.calibrate import full_budget_jobs
 from agent.app.eval.lfe_data import generate_dataset
-from agent.app.eval.runner import Job, comparable, read_results, run_jobs
+from agent.app.eval.runner import Job, WorldAddress, comparable, read_results, run_jobs
 from agent.app.runtime.ray_backend import LOCAL, NEEDS_RAY
 from agent.lfe.samples import DataConfig
 from agent.lfe.shards import load_shard, shard_path
 from agent.lfe.task import CoverageConfig
+from worlds.bus.session import free_tcp_endpoint
 from worlds.suite import plan_split, write_suite
 
 #: How long a killed process's world may take to notice and end (it looks twice a second).
@@ -156,11 +157,21 @@ def test_homes_explored_as_ray_tasks_give_the_same_shards(ray_cluster: None, tmp
             np.testing.assert_array_equal(here[name], there[name])
 
 
-def test_ray_and_worlds_together_are_refused_naming_both(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code = _exit_code(["calibrate", "--suite", str(tmp_path / "suite.jsonl"), "--ray", "--worlds",
-                       "tcp/127.0.0.1:7447"])
-    assert code == 2
-    assert "--ray and --worlds cannot be used together" in capsys.readouterr().err
+@pytest.mark.slow
+def test_ray_tasks_take_turns_in_a_running_world_they_join(ray_cluster: None, tmp_path: Path) -> None:
+    config = _config(2)
+    jobs = _jobs(tmp_path, 2, 75300, config)
+    endpoint = free_tcp_endpoint()
+    world = subprocess.Popen([sys.executable, "-m", "agent.app.cli", "world", "--namespace", "homebot/far",
+                              "--listen", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        assert run_jobs(jobs, tmp_path / "results.jsonl", 1, config, worlds=[WorldAddress(endpoint, "homebot/far")],
+                        ray=LOCAL) == 2
+    finally:
+        world.terminate()
+        world.wait(10)
+    results = read_results(tmp_path / "results.jsonl")
+    assert [r["status"] != "failed" and r["steps"] == 2 for r in results] == [True, True], results
 
 
 @pytest.mark.parametrize("command", [["calibrate", "--suite", "s.jsonl"], ["eval", "coverage"],

@@ -94,11 +94,14 @@ class TreeSettings:
 @dataclass(frozen=True)
 class RaySettings:
     """What an evaluation's episode asks of a Ray cluster (``--ray``, docs/scale.md): the CPUs it
-    uses, its agent's process and the world process it starts beside it together. Ray starts no
-    more episodes on a node than its CPUs hold, so the figure is what keeps a node from being
-    oversubscribed; a fraction is allowed (1.5: a world that mostly waits on its agent)."""
+    uses, its agent's process and the world process it starts beside it together
+    (``cpus_per_episode``), or its agent's alone when it joins a running world elsewhere
+    (``--worlds``: ``cpus_per_agent``). Ray starts no more episodes on a node than its CPUs hold,
+    so the figures are what keep a node from being oversubscribed; fractions are allowed (1.5: a
+    world that mostly waits on its agent)."""
 
     cpus_per_episode: float = 2.0
+    cpus_per_agent: float = 1.0
 
 
 @dataclass(frozen=True)

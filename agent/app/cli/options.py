@@ -93,11 +93,13 @@ def add_suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: s
     parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} (default {out})")
     parser.add_argument("--worlds", metavar="ENDPOINTS",
                         help="join running worlds instead of starting one per worker: comma-separated "
-                             "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each)")
-    add_ray_option(parser, "episode", "its world")
+                             "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each; "
+                             "with --ray, one Ray task at a time each)")
+    add_ray_option(parser, "episode", "that starts its world on the node it lands on (with --worlds: that joins "
+                                      "one no other task is using)")
 
 
-def add_ray_option(parser: argparse.ArgumentParser, call: str, beside: str = "") -> None:
+def add_ray_option(parser: argparse.ArgumentParser, call: str, task: str = "") -> None:
     """Give a command that hands out many calls (episodes, scenes, homes) ``--ray [ADDRESS]``: each
     call a Ray task instead of a call in a local worker process. Given where Ray is not installed,
     the option is refused at once, saying how to install it.
@@ -105,13 +107,13 @@ def add_ray_option(parser: argparse.ArgumentParser, call: str, beside: str = "")
     Args:
         parser: the command's parser.
         call: what one call is, for the help text ("episode", "home").
-        beside: what a task starts beside its call, for the help text ("" for nothing).
+        task: what else a task does, for the help text ("that starts its world…"; "" for nothing).
     """
     from agent.app.runtime.ray_backend import LOCAL
 
-    starts = f" that starts {beside} on the node it lands on" if beside else ""
     parser.add_argument("--ray", nargs="?", const=LOCAL, default=None, metavar="ADDRESS", action=_RayOption,
-                        help=f"run each {call} as a Ray task{starts}: on a local Ray cluster started for "
+                        help=f"run each {call} as a Ray task{' ' + task if task else ''}: on a local Ray cluster "
+                             "started for "
                              f"this command (--workers {call}s at once), or on the cluster at ADDRESS "
                              "(auto: the one this machine joined with `ray start`; HOST:6379: its head) "
                              "(docs/scale.md; pip install 'homebot[ray]')")
@@ -174,8 +176,7 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
     """The settings of a suite run (workers need no watcher endpoint), or None after a clear message.
 
     Also checks ``--worlds``, leaving the parsed addresses in
-    ``args.world_addresses`` (None without ``--worlds``), and refuses it with ``--ray``: a Ray task
-    starts its world beside its agent on the node it lands on.
+    ``args.world_addresses`` (None without ``--worlds``).
 
     Args:
         args: the parsed command line of a command given `add_suite_run_options`.
@@ -192,10 +193,6 @@ def suite_settings(args: argparse.Namespace) -> Config | None:
         args.world_addresses = [WorldAddress.parse(w) for w in args.worlds.split(",") if w.strip()] if args.worlds else None
     except ValueError as error:
         print(f"homebot: --worlds: {error}", file=sys.stderr)
-        return None
-    if args.world_addresses and args.ray is not None:
-        print("homebot: --ray and --worlds cannot be used together: each Ray task starts its own world on the "
-              "node it lands on; to join running worlds, leave out --ray (docs/scale.md)", file=sys.stderr)
         return None
     return _zenoh_checked(load_config(args.config, [*args.set, *_zenoh_override(args), "bus.listen=[]"]))
 

@@ -5,8 +5,8 @@ world's start-up is paid once per worker, not once per episode (a world that end
 it ended in, saying how, and the worker starts another for the next). Given running worlds instead
 (``homebot world`` on other machines, each named by its Zenoh endpoint), one worker joins each of
 them, so the same command spreads its episodes over several machines. On a Ray cluster (``--ray``)
-each episode is instead a task that starts its own world on the node it lands on, and Ray runs it
-again when its worker or node dies. Results go to a JSON-lines file, one line per finished episode,
+each episode is instead a task that starts its own world on the node it lands on (or joins a listed
+world that no other task is using), and Ray runs it again when its worker or node dies. Results go to a JSON-lines file, one line per finished episode,
 flushed at once; a rerun skips the (scenario, variant) pairs already in the file, so an interrupted
 evaluation loses nothing and redoes nothing.
 """
@@ -33,7 +33,8 @@ from worlds.bus.liveness import describe_exit
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
 from agent.app.runtime.episode_bus import EpisodeBus
-from agent.app.runtime.pool import as_finished, in_processes, quiet_worker
+from agent.app.runtime import ray_backend
+from agent.app.runtime.pool import in_processes, quiet_worker
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
 
@@ -126,19 +127,15 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         worlds: running worlds to join instead, one worker each.
         recordings: where to keep each episode's run folder with its Rerun recording
             (``<recordings>/<id>-<variant>/recording.rrd``); None keeps no recording.
-        ray: run each episode as a Ray task that starts its own world on the node it lands on
-            (`run_in_own_world`), declaring ``ray.cpus_per_episode`` CPUs: `ray_backend.LOCAL` on
-            a cluster started here, else on the one at this address; None: worker processes here.
+        ray: run each episode as a Ray task (`ray_backend.LOCAL`: on a cluster started here,
+            else on the one at this address; None: worker processes here). A task starts its own
+            world on the node it lands on (`run_in_own_world`), declaring ``ray.cpus_per_episode``
+            CPUs; with ``worlds``, it joins one no other task is using (`run_in_world`), declaring
+            ``ray.cpus_per_agent``, so that as many episodes run at once as there are worlds.
 
     Returns:
         How many jobs ran now (0 when the file held them all).
-
-    Raises:
-        ValueError: both ``ray`` and ``worlds``.
     """
-    if ray is not None and worlds:
-        raise ValueError("--ray and --worlds: a Ray task starts its world beside its agent; "
-                         "join running worlds without --ray")
     done = finished_keys(results_path)
     todo = [job for job in jobs if job.key not in done]
     results_path.parent.mkdir(parents=True, exist_ok=True)
@@ -146,7 +143,10 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
         return 0
     calls = [(job, base_config, recordings.resolve() if recordings else None) for job in todo]
     if ray is not None:
-        finished = as_finished(run_in_own_world, calls, workers, ray, base_config.ray.cpus_per_episode)
+        function, cpus = ((run_in_world, base_config.ray.cpus_per_agent) if worlds else
+                          (run_in_own_world, base_config.ray.cpus_per_episode))
+        finished = ray_backend.as_finished(function, calls, ray, cpus, len(worlds) if worlds else workers,
+                                           worlds or None)
     else:
         addresses = multiprocessing.get_context("spawn").Queue()
         for address in worlds or []:
@@ -323,6 +323,22 @@ def run_in_own_world(job: Job, base_config: Config, recordings: Path | None = No
         Its result line; any failure is a result with its reason, never a crash.
     """
     return _episode_record(job, base_config, recordings, None)
+
+
+def run_in_world(job: Job, base_config: Config, recordings: Path | None, world: WorldAddress) -> dict[str, Any]:
+    """One episode in a running world that no other episode uses meanwhile, from any process: a Ray
+    task's, on whichever node it lands (`run_jobs` hands each world to one task at a time).
+
+    Args:
+        job: the episode.
+        base_config: the settings the job's overrides apply to.
+        recordings: where to keep its run folder with its Rerun recording (None: none kept).
+        world: the world to join.
+
+    Returns:
+        Its result line; any failure is a result with its reason, never a crash.
+    """
+    return _episode_record(job, base_config, recordings, WorkerWorld(world.namespace, world.endpoint, _scratch()))
 
 
 @functools.cache

@@ -55,7 +55,7 @@ def ray_module() -> ModuleType:
 
 
 def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]], address: str, cpus: float,
-                workers: int) -> Iterator[tuple[tuple[Any, ...], Result]]:
+                workers: int, slots: Sequence[Any] | None = None) -> Iterator[tuple[tuple[Any, ...], Result]]:
     """(arguments, ``function(*arguments)``) for each of ``calls``, each run as a Ray task, as each finishes.
 
     Args:
@@ -66,25 +66,37 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
         cpus: the CPUs each task declares (a fraction is allowed).
         workers: tasks at once on a cluster started here, which gets ``workers × cpus`` CPUs; a
             joined cluster runs as many at once as its CPUs hold.
+        slots: things only one call may use at a time (running worlds to join): each call gets a
+            free one as its last argument, held until its task has finished, so no more calls run
+            at once than there are slots. None: every call is handed out at once.
 
     Yields:
-        Each call's arguments and result.
+        Each call's arguments (a slot left out) and result.
 
     Raises:
         RayError: Ray is missing, the cluster cannot be started or joined, or a task's worker or
             node died more than `MAX_RETRIES` times.
         ray.exceptions.RayTaskError: a call raised; its exception is the cause.
+        ValueError: an empty list of slots (no call could ever run).
     """
+    if slots is not None and not slots:
+        raise ValueError("slots: none given, so no call could run")
     with cluster(address, math.ceil(workers * cpus)) as ray:
         remote = ray.remote(function).options(num_cpus=cpus, max_retries=MAX_RETRIES, retry_exceptions=False)
-        pending: dict[Any, tuple[Any, ...]] = {}
+        waiting, free = list(calls), list(slots) if slots is not None else None
+        pending: dict[Any, tuple[tuple[Any, ...], Any]] = {}
         try:
-            for arguments in calls:
-                pending[remote.remote(*arguments)] = arguments
-            while pending:
+            while waiting or pending:
+                while waiting and (free is None or free):
+                    arguments, slot = waiting.pop(0), free.pop(0) if free else None
+                    pending[remote.remote(*arguments, *([slot] if free is not None else []))] = (arguments, slot)
                 ready, _ = ray.wait(list(pending), num_returns=1, timeout=WAIT_S)
                 for ref in ready:
-                    yield pending.pop(ref), _result(ray, ref)
+                    arguments, slot = pending.pop(ref)
+                    result = _result(ray, ref)
+                    if free is not None:
+                        free.append(slot)
+                    yield arguments, result
         finally:
             for ref in pending:  # stopped early: nothing goes on running for results no one will read
                 ray.cancel(ref, force=True)
