@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -37,16 +38,16 @@ WORLD_ENDS_WITHIN_S = 10.0
 
 
 @pytest.fixture(scope="module")
-def ray_cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """A local Ray cluster of two CPUs for this module, its session files in a temporary folder;
-    shut down (every process of it ended) afterwards."""
+def ray_cluster() -> Iterator[None]:
+    """A local Ray cluster of two CPUs for this module, its session files in a temporary folder
+    (a short one: its socket paths must fit); shut down (every process of it ended) afterwards."""
     import ray
 
-    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    ray.init(address=LOCAL, num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING,
-             _temp_dir=str(tmp_path_factory.mktemp("ray")))
-    yield
-    ray.shutdown()
+    with tempfile.TemporaryDirectory(prefix="ray-") as session:
+        ray.init(address=LOCAL, num_cpus=2, include_dashboard=False, log_to_driver=False,
+                 logging_level=logging.ERROR, _temp_dir=session)
+        yield
+        ray.shutdown()
 
 
 def _config(budget: int) -> Config:

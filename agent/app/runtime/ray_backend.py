@@ -131,7 +131,7 @@ def cluster(address: str, cpus: int) -> Iterator[ModuleType]:
             ray.init(address=LOCAL, num_cpus=max(1, cpus), **options)
         else:
             ray.init(address=address, **options)
-    except (ConnectionError, RuntimeError, ValueError) as error:
+    except Exception as error:  # Ray's own kinds vary: ConnectionError, OSError, RuntimeError, ValueError…
         where = "a local Ray cluster could not be started" if address == LOCAL else f"no Ray cluster joined at {address}"
         raise RayError(f"--ray: {where}: {error}") from None
     try:
