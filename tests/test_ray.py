@@ -198,7 +198,8 @@ def test_a_world_ends_when_the_process_that_started_it_is_killed(tmp_path: Path)
          "import sys, time; from pathlib import Path; from agent.app.config import CameraSettings; "
          "from agent.app.runtime.world_process import WorldProcess; "
          "from worlds.bus.session import free_tcp_endpoint; "
-         f"w = WorldProcess('homebot/eval-orphan', free_tcp_endpoint(), CameraSettings(), Path({str(tmp_path)!r}) / 'w.log'); "
+         "w = WorldProcess('homebot/eval-orphan', free_tcp_endpoint(), CameraSettings(), "
+         f"Path({str(tmp_path)!r}) / 'w.log'); "
          "print(w.process.pid, flush=True); time.sleep(120)"],
         stdout=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])})
     world = psutil.Process(int(starter.stdout.readline()))

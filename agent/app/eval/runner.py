@@ -6,9 +6,9 @@ it ended in, saying how, and the worker starts another for the next). Given runn
 (``homebot world`` on other machines, each named by its Zenoh endpoint), one worker joins each of
 them, so the same command spreads its episodes over several machines. On a Ray cluster (``--ray``)
 each episode is instead a task that starts its own world on the node it lands on (or joins a listed
-world that no other task is using), and Ray runs it again when its worker or node dies. Results go to a JSON-lines file, one line per finished episode,
-flushed at once; a rerun skips the (scenario, variant) pairs already in the file, so an interrupted
-evaluation loses nothing and redoes nothing.
+world that no other task is using), and Ray runs it again when its worker or node dies. Results go
+to a JSON-lines file, one line per finished episode, flushed at once; a rerun skips the (scenario,
+variant) pairs already in the file, so an interrupted evaluation loses nothing and redoes nothing.
 """
 
 from __future__ import annotations

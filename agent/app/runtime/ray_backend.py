@@ -132,7 +132,8 @@ def cluster(address: str, cpus: int) -> Iterator[ModuleType]:
         else:
             ray.init(address=address, **options)
     except Exception as error:  # Ray's own kinds vary: ConnectionError, OSError, RuntimeError, ValueError…
-        where = "a local Ray cluster could not be started" if address == LOCAL else f"no Ray cluster joined at {address}"
+        where = ("a local Ray cluster could not be started" if address == LOCAL
+                 else f"no Ray cluster joined at {address}")
         raise RayError(f"--ray: {where}: {error}") from None
     try:
         yield ray
