@@ -69,9 +69,32 @@ def bench_eval(episodes: int, budget: int, workers: Sequence[int], with_ray: boo
                              "episodes_per_minute": round(60.0 * len(done) / seconds, 2),
                              "without_start": round(60.0 * len(done) / (seconds - start_s), 2)})
                 records.append(comparable(done))
+                rows[-1]["differs_from_first"] = differences(records[0], records[-1])
                 progress(f"  {backend} × {count}: {len(done)} episodes in {seconds:.1f} s")
     return {"episodes": episodes, "budget": budget, "cpus_per_episode": config.ray.cpus_per_episode,
-            "runs": rows, "same_records": all(r == records[0] for r in records)}
+            "runs": rows, "same_records": not any(row["differs_from_first"] for row in rows)}
+
+
+def differences(first: list[dict[str, Any]], other: list[dict[str, Any]]) -> list[str]:
+    """Where two runs' records of the same episodes differ: ``"ID VARIANT: field, field"`` per
+    episode that does (or that only one run has).
+
+    Args:
+        first: one run's records (`comparable`).
+        other: another run's.
+
+    Returns:
+        One line per episode that differs; none when they agree.
+    """
+    mine = {(r["id"], r["variant"]): r for r in first}
+    theirs = {(r["id"], r["variant"]): r for r in other}
+    lines = []
+    for key in sorted(mine.keys() | theirs.keys()):
+        a, b = mine.get(key), theirs.get(key)
+        fields = ["(only one run has it)"] if a is None or b is None else [f for f in a if a[f] != b.get(f)]
+        if fields:
+            lines.append(f"{key[0]} {key[1]}: {', '.join(fields)}")
+    return lines
 
 
 def format_eval_table(report: dict[str, Any]) -> str:
@@ -92,5 +115,8 @@ def format_eval_table(report: dict[str, Any]) -> str:
                      f"{row['seconds']:>10.1f}{row['cluster_start_s']:>17.1f}{row['episodes_per_minute']:>14.2f}"
                      f"{row['without_start']:>15.2f}")
     lines.append("every run gave the same records (timing aside)" if report["same_records"]
-                 else "the runs' records differ (timing aside)")
+                 else "the runs' records differ (timing aside):")
+    for row in report["runs"]:
+        lines += [f"  {row['backend']} × {row['workers']} against the first run: {line}"
+                  for line in row["differs_from_first"]]
     return "\n".join(lines)
