@@ -30,12 +30,13 @@ LOCAL = "local"
 NEEDS_RAY = "--ray needs the ray package: pip install 'homebot[ray]'"
 #: How often Ray runs a task again whose worker or node died, before the command fails with it.
 MAX_RETRIES = 3
-#: How long the caller waits for a result before it looks again (a Ctrl-C is felt at once anyway).
+#: How long the caller waits for a result before it looks again: a Ctrl-C is felt within this at the latest.
 WAIT_S = 0.5
 
 
 class RayError(RuntimeError):
-    """Ray is not installed, or the cluster cannot be started or joined; the text says which."""
+    """Ray is not installed, the cluster cannot be started or joined, or a task's worker or node died
+    each time it ran; the text says which."""
 
 
 def ray_module() -> ModuleType:
