@@ -9,10 +9,12 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+import psutil
 import pytest
 
 pytestmark = pytest.mark.slow
@@ -100,8 +102,6 @@ def test_run_stops_on_ctrl_c_mid_episode_keeping_its_record(tmp_path: Path) -> N
 
 def test_an_evaluation_stops_on_ctrl_c_while_its_workers_start(tmp_path: Path, small_suite: Path) -> None:
     """Ctrl-C while the workers still import: they leave it to the command, which ends quietly."""
-    import psutil
-
     process = _start(["eval", "explore", "--suite", str(small_suite), "--workers", "2", "--methods", "fbe",
                       "--out", str(tmp_path / "out"), "--listen", _free()], tmp_path)
     deadline = time.monotonic() + 120
@@ -115,8 +115,6 @@ def test_an_evaluation_stops_on_ctrl_c_while_its_workers_start(tmp_path: Path, s
 def _importing(process: "psutil.Process") -> bool:
     """Whether ``process`` is a pool worker that has begun to load the evaluation's modules (numpy
     is among the first): a Ctrl-C then lands in the middle of its imports."""
-    import psutil
-
     try:
         return "spawn_main" in " ".join(process.cmdline()) and any(
             "numpy" in region.path for region in process.memory_maps())
@@ -142,6 +140,22 @@ def test_an_evaluation_stops_on_ctrl_c_and_a_rerun_resumes(tmp_path: Path, small
     assert rerun.wait(timeout=600) == 0, rerun.communicate()[1][-2000:]
     again = _whole_lines(results)
     assert again[:len(kept)] == kept and len(again) == total
+
+
+def test_a_ray_evaluation_stops_on_ctrl_c_keeping_whole_lines_and_leaving_nothing_running(
+        tmp_path: Path, small_suite: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With --ray the command started a local Ray cluster: Ctrl-C cancels its tasks (their worlds end
+    with their workers) and shuts it down; every process of the command's group is gone."""
+    out = tmp_path / "out"
+    with tempfile.TemporaryDirectory(prefix="ray-") as session:  # short: the cluster's socket paths must fit
+        monkeypatch.setenv("RAY_TMPDIR", session)
+        process = _start(["eval", "explore", "--suite", str(small_suite), "--ray", "--workers", "2", "--methods",
+                          "fbe", "--out", str(out), "--set", "episode.budget=4"], tmp_path)
+        _quiet(*_interrupt_once(process, out / "explore-results.jsonl", 1))
+        assert 1 <= len(_whole_lines(out / "explore-results.jsonl")) < 3
+        time.sleep(2.0)  # the cancelled tasks' worlds notice their workers' end within a second
+        left = [p for p in psutil.process_iter(["pid"]) if _in_group(p, process.pid)]
+    assert left == [], [p.cmdline() for p in left]
 
 
 @pytest.mark.parametrize("command, results", [
@@ -190,8 +204,6 @@ def test_suite_make_stops_on_ctrl_c_and_a_rerun_resumes(tmp_path: Path) -> None:
 
 
 def test_calibrate_stops_on_ctrl_c_keeping_finished_episodes_and_leaving_no_world(tmp_path: Path) -> None:
-    import psutil
-
     suite = tmp_path / "suite"
     made = subprocess.run([sys.executable, "-m", "agent.app.cli", "suite", "make", "--n", "6", "--seed-base", "71000",
                            "--hidden", "never", "--out", str(suite)], capture_output=True,

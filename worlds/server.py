@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import os
 import signal
 import sys
 import threading
@@ -296,6 +297,23 @@ def run_world(
         session.close()
 
 
+def end_with_parent(parent: int, stop: threading.Event, period_s: float = 0.5) -> None:
+    """Set ``stop`` once this process's parent is no longer ``parent``: it has ended, and this
+    process was handed to another (an orphan's parent is init or a subreaper). A parent that is
+    killed (SIGKILL: an evaluation worker a scheduler ends, or whose machine runs out of memory)
+    runs no cleanup, so the world sees to its own end.
+
+    Args:
+        parent: the process id of the process that started this one.
+        stop: the event that ends the serving.
+        period_s: how often the parent is looked at.
+    """
+    while not stop.wait(period_s):
+        if os.getppid() != parent:
+            log.warning("the process that started this world (%d) has ended; stopping", parent)
+            stop.set()
+
+
 def _parser() -> argparse.ArgumentParser:
     defaults = CameraConfig()
     parser = argparse.ArgumentParser(prog="homebot world", description="Serve a simulated home over Zenoh.")
@@ -305,6 +323,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--connect", action="append", default=[], help="endpoint to connect to (repeatable)")
     parser.add_argument("--seed", type=int, help="reset to this home at start")
+    parser.add_argument("--parent", type=int, metavar="PID",
+                        help="the process that started this world: end when it has ended, so that a world "
+                             "is never left behind by one that was killed")
     parser.add_argument("--zenoh-config", metavar="FILE",
                         help="a Zenoh configuration file (JSON5): TLS with mutual authentication, access "
                              "control; its listen/connect endpoints, where it sets them, replace these "
@@ -342,6 +363,8 @@ def main(argv: list[str] | None = None) -> int:
     stop = threading.Event()
     for signum in (signal.SIGTERM, signal.SIGINT):
         signal.signal(signum, lambda *_: stop.set())
+    if args.parent is not None:
+        threading.Thread(target=end_with_parent, args=(args.parent, stop), name="parent watch", daemon=True).start()
     try:
         run_world(args.namespace, args.listen or [DEFAULT_LISTEN], args.connect, camera, args.seed, stop,
                   args.zenoh_config)

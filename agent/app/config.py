@@ -92,6 +92,19 @@ class TreeSettings:
 
 
 @dataclass(frozen=True)
+class RaySettings:
+    """What an evaluation's episode asks of a Ray cluster (``--ray``, docs/scale.md): the CPUs it
+    uses, its agent's process and the world process it starts beside it together
+    (``cpus_per_episode``), or its agent's alone when it joins a running world elsewhere
+    (``--worlds``: ``cpus_per_agent``). Ray starts no more episodes on a node than its CPUs hold,
+    so the figures are what keep a node from being oversubscribed; fractions are allowed (1.5: a
+    world that mostly waits on its agent)."""
+
+    cpus_per_episode: float = 2.0
+    cpus_per_agent: float = 1.0
+
+
+@dataclass(frozen=True)
 class Config:
     """Every setting of a run, one section per part of the agent; ``[section]`` in TOML, ``section.key`` with --set."""
 
@@ -107,6 +120,7 @@ class Config:
     stop: StopConfig = field(default_factory=StopConfig)
     act: LookInsideConfig = field(default_factory=LookInsideConfig)
     tree: TreeSettings = field(default_factory=TreeSettings)
+    ray: RaySettings = field(default_factory=RaySettings)
 
 
 def load_config(path: Path | None = None, overrides: list[str] | None = None, base: Config | None = None) -> Config:

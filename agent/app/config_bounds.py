@@ -114,6 +114,8 @@ BOUNDS: dict[str, Range | Locator] = {
     "episode.tick_period_s": Range(0.0, 60.0),  # 0: ticks are not paced
     "episode.max_wait_s": _above(0.0, 60.0),
     "episode.vlm_timeout_s": _TIMEOUT_S,
+    "ray.cpus_per_episode": _above(0.0, 1024.0),  # Ray takes fractions of a CPU; a node has at most this many
+    "ray.cpus_per_agent": _above(0.0, 1024.0),
     "map.size_m": _above(0.0, 1000.0),
     "map.resolution": _above(0.0, 10.0),
     "map.floor_band": _HEIGHT_M,

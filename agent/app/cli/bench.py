@@ -1,6 +1,6 @@
 """`homebot bench`: speed of a step's stages, the arm's skills, LFE planning and the world; the
 world's answers to malformed requests (fuzz); episodes side by side for a while (soak); how fast
-faults are reported (faults)."""
+faults are reported (faults); evaluation episodes per minute, process pool against Ray (eval)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, load_settings
+from agent.app.cli.options import INTERRUPTED, Commands, add_config_options, count_option, load_settings
 
 
 def add_command(commands: Commands) -> None:
@@ -74,6 +74,15 @@ def add_command(commands: Commands) -> None:
     faults.add_argument("--json", action="store_true", help="print the figures as JSON")
     faults.set_defaults(handler=_bench_faults)
 
+    evaluation = benches.add_parser("eval", help="evaluation episodes per minute in local worker processes and "
+                                                 "on a local Ray cluster, with 1 and 2 workers (docs/scale.md)")
+    evaluation.add_argument("--episodes", type=count_option, default=6, help="episodes per run (default 6)")
+    evaluation.add_argument("--budget", type=count_option, default=8, help="steps per episode (default 8)")
+    evaluation.add_argument("--workers", default="1,2", help="worker counts, comma separated (default 1,2)")
+    evaluation.add_argument("--no-ray", action="store_true", help="the process pool alone")
+    evaluation.add_argument("--json", action="store_true", help="print the figures as JSON")
+    evaluation.set_defaults(handler=_bench_eval)
+
 
 def _bench_fuzz(args: argparse.Namespace) -> int:
     from agent.app.bench import dump
@@ -107,6 +116,28 @@ def _bench_faults(args: argparse.Namespace) -> int:
         return 2
     report = bench_faults(args.repeats, lambda line: print(line, file=sys.stderr, flush=True))
     print(dump(report) if args.json else format_faults_table(report))
+    return 0
+
+
+def _bench_eval(args: argparse.Namespace) -> int:
+    from agent.app.bench import dump
+    from agent.app.bench.eval_speed import bench_eval, format_eval_table
+    from agent.app.runtime.ray_backend import RayError, ray_module
+
+    try:
+        workers = [count_option(word) for word in args.workers.split(",") if word.strip()]
+    except argparse.ArgumentTypeError as error:
+        print(f"homebot bench eval: --workers: {error}", file=sys.stderr)
+        return 2
+    try:
+        if not args.no_ray:
+            ray_module()
+        report = bench_eval(args.episodes, args.budget, workers or [1], not args.no_ray,
+                            lambda line: print(line, file=sys.stderr, flush=True))
+    except RayError as error:
+        print(f"homebot bench eval: {error} (or --no-ray)", file=sys.stderr)
+        return 2
+    print(dump(report) if args.json else format_eval_table(report))
     return 0
 
 

@@ -23,14 +23,16 @@ def add_command(commands: Commands) -> None:
 def _calibrate(args: argparse.Namespace) -> int:
     from agent.eqa.calibration import CalibrationError
     from agent.app.eval.calibrate import calibrate, episodes_path
+    from agent.app.runtime.ray_backend import RayError
     from worlds.suite import SuiteError
 
     config = suite_settings(args)
     if config is None:
         return 2
     try:
-        calibration = calibrate(args.suite, args.out, args.workers, config, args.limit, args.world_addresses)
-    except (CalibrationError, SuiteError, OSError) as error:
+        calibration = calibrate(args.suite, args.out, args.workers, config, args.limit, args.world_addresses,
+                                args.ray)
+    except (CalibrationError, SuiteError, RayError, OSError) as error:
         print(f"homebot calibrate: {error}", file=sys.stderr)
         return 2
     n = len(calibration.episodes)

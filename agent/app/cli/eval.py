@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import Commands, add_suite_run_options, count_option, suite_settings
+from agent.app.cli.options import Commands, add_ray_option, add_suite_run_options, count_option, suite_settings
 
 RECORD_HELP = ("keep each episode's run folder with its Rerun recording under OUT/recordings "
                "(homebot replay opens one); without it evaluation episodes record nothing")
@@ -50,6 +50,7 @@ def add_command(commands: Commands) -> None:
     interactive.add_argument("--out", type=Path, default=Path("runs/eval-interactive"),
                              help="results go here; reruns resume")
     interactive.add_argument("--record", action="store_true", help=RECORD_HELP.replace("episode", "scene"))
+    add_ray_option(interactive, "scene")
     interactive.set_defaults(handler=_eval_interactive)
 
     coverage = evaluations.add_parser("coverage", help="learning-augmented exploration: coverage in 500 steps "
@@ -66,6 +67,7 @@ def add_command(commands: Commands) -> None:
                           help="episodes at once, one process each (default 1)")
     coverage.add_argument("--out", type=Path, default=Path("runs/eval-coverage"),
                           help="results, table.md and coverage.png go here; reruns resume")
+    add_ray_option(coverage, "episode")
     coverage.set_defaults(handler=_eval_coverage)
 
     acts = evaluations.add_parser("acts", help="what the act branch did over an evaluation's episodes")
@@ -76,6 +78,7 @@ def add_command(commands: Commands) -> None:
 
 def _eval_explore(args: argparse.Namespace) -> int:
     from agent.app.eval.method_comparison import evaluate_explore
+    from agent.app.runtime.ray_backend import RayError
     from worlds.suite import SuiteError
 
     config = suite_settings(args)
@@ -84,8 +87,8 @@ def _eval_explore(args: argparse.Namespace) -> int:
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
         report = evaluate_explore(args.suite, methods, args.out, args.workers, config, args.limit,
-                                  args.world_addresses, _recordings(args))
-    except (ValueError, SuiteError, OSError) as error:
+                                  args.world_addresses, _recordings(args), args.ray)
+    except (ValueError, SuiteError, RayError, OSError) as error:
         print(f"homebot eval explore: {error}", file=sys.stderr)
         return 2
     taus = report["taus"]
@@ -106,6 +109,7 @@ def _eval_explore(args: argparse.Namespace) -> int:
 def _eval_stop(args: argparse.Namespace) -> int:
     from agent.eqa.calibration import CalibrationError
     from agent.app.eval.stop import evaluate_stop
+    from agent.app.runtime.ray_backend import RayError
     from worlds.suite import SuiteError
 
     config = suite_settings(args)
@@ -113,8 +117,8 @@ def _eval_stop(args: argparse.Namespace) -> int:
         return 2
     try:
         report = evaluate_stop(args.suite, args.calibration, args.out, args.workers, config, args.limit,
-                               args.world_addresses, _recordings(args))
-    except (CalibrationError, SuiteError, ValueError, OSError) as error:
+                               args.world_addresses, _recordings(args), args.ray)
+    except (CalibrationError, SuiteError, ValueError, RayError, OSError) as error:
         print(f"homebot eval stop: {error}", file=sys.stderr)
         return 2
     print(f"{report['n']} test episodes ({report['failed']} failed), calibrated on {report['calibration_n']}")
@@ -136,13 +140,14 @@ def _eval_stop(args: argparse.Namespace) -> int:
 
 def _eval_interactive(args: argparse.Namespace) -> int:
     from agent.app.eval.interactive import COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress
+    from agent.app.runtime.ray_backend import RayError
     from worlds.tabletop import TASKS
 
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
     try:
         report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress, args.workers,
-                                      _recordings(args))
-    except ValueError as error:
+                                      _recordings(args), args.ray)
+    except (ValueError, RayError) as error:
         print(f"homebot eval interactive: {error}", file=sys.stderr)
         return 2
     print(f"{report['n']} scenes, executor {args.executor}; mean ± s.e. over the variants")
@@ -167,12 +172,13 @@ def _eval_acts(args: argparse.Namespace) -> int:
 
 def _eval_coverage(args: argparse.Namespace) -> int:
     from agent.app.eval.coverage import evaluate_coverage, format_table, plot_curves, print_progress
+    from agent.app.runtime.ray_backend import RayError
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
         report = evaluate_coverage(args.out, args.homes, methods, args.workers, args.model, args.steps,
-                                   print_progress)
-    except ValueError as error:
+                                   print_progress, args.ray)
+    except (ValueError, RayError) as error:
         print(f"homebot eval coverage: {error}", file=sys.stderr)
         return 2
     text = format_table(report["table"])

@@ -16,7 +16,7 @@ import sys
 import time
 from pathlib import Path
 
-from agent.app.cli.options import count_option, seed_option
+from agent.app.cli.options import add_ray_option, count_option, seed_option
 
 DEFAULT_DATA = Path("runs/lfe-data")
 DEFAULT_TRAIN = Path("runs/lfe-train")
@@ -30,6 +30,7 @@ def _parser() -> argparse.ArgumentParser:
     data.add_argument("--first-seed", type=seed_option, default=0, help="seed of the first home (default 0)")
     data.add_argument("--out", type=Path, default=DEFAULT_DATA, help=f"shard folder (default {DEFAULT_DATA})")
     data.add_argument("--workers", type=count_option, default=1, help="homes explored at once, one process each")
+    add_ray_option(data, "home")
     train = commands.add_parser("train", help="fit the UNet on the shards; held-out split by home")
     train.add_argument("--data", type=Path, default=DEFAULT_DATA, help=f"shard folder (default {DEFAULT_DATA})")
     train.add_argument("--out", type=Path, default=DEFAULT_TRAIN,
@@ -57,9 +58,11 @@ def main(argv: list[str] | None = None) -> int:
         args = _parser().parse_args(argv)
     except SystemExit as exit_:
         return int(exit_.code or 0)
+    from agent.app.runtime.ray_backend import RayError
+
     try:
         return _data(args) if args.command == "data" else _train(args)
-    except (ValueError, FileNotFoundError) as error:
+    except (ValueError, FileNotFoundError, RayError) as error:
         print(f"homebot lfe {args.command}: {error}", file=sys.stderr)
         return 2
 
@@ -89,7 +92,7 @@ def _data(args: argparse.Namespace) -> int:
         sys.stderr.flush()
 
     seeds = range(args.first_seed, args.first_seed + args.homes)
-    summary = generate_dataset(args.out, seeds, workers=args.workers, progress=progress)
+    summary = generate_dataset(args.out, seeds, workers=args.workers, progress=progress, ray=args.ray)
     print(summary)
     return 0
 

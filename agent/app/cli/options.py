@@ -2,6 +2,7 @@
 
 The commands that run episodes take settings (`--config`, `--set`, `--listen`); those that run a
 suite's episodes in worker processes take the suite, the workers and where the worlds are as well.
+The commands that hand out many episodes or homes can hand them to a Ray cluster (`add_ray_option`).
 A number an option takes is checked as the command line is parsed (`seed_option`, `count_option`,
 `seconds_option`), so a value no run could use is refused, naming the option, before any world starts.
 """
@@ -14,6 +15,7 @@ import math
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from agent.app.config import Config, ConfigError, load_config
 from agent.app.config_bounds import MAX_SEED
@@ -91,7 +93,44 @@ def add_suite_run_options(parser: argparse.ArgumentParser, out: str, out_help: s
     parser.add_argument("--out", type=Path, default=Path(out), help=f"{out_help} (default {out})")
     parser.add_argument("--worlds", metavar="ENDPOINTS",
                         help="join running worlds instead of starting one per worker: comma-separated "
-                             "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each)")
+                             "[NAMESPACE@]ENDPOINT, e.g. tcp/10.0.0.2:7447,tcp/10.0.0.3:7447 (one worker each; "
+                             "with --ray, one Ray task at a time each)")
+    add_ray_option(parser, "episode", "that starts its world on the node it lands on (with --worlds: that joins "
+                                      "one no other task is using)")
+
+
+def add_ray_option(parser: argparse.ArgumentParser, call: str, task: str = "") -> None:
+    """Give a command that hands out many calls (episodes, scenes, homes) ``--ray [ADDRESS]``: each
+    call a Ray task instead of a call in a local worker process. Given where Ray is not installed,
+    the option is refused at once, saying how to install it.
+
+    Args:
+        parser: the command's parser.
+        call: what one call is, for the help text ("episode", "home").
+        task: what else a task does, for the help text ("that starts its world…"; "" for nothing).
+    """
+    from agent.app.runtime.ray_backend import LOCAL
+
+    parser.add_argument("--ray", nargs="?", const=LOCAL, default=None, metavar="ADDRESS", action=_RayOption,
+                        help=f"run each {call} as a Ray task{' ' + task if task else ''}: on a local Ray cluster "
+                             "started for "
+                             f"this command (--workers {call}s at once), or on the cluster at ADDRESS "
+                             "(auto: the one this machine joined with `ray start`; HOST:6379: its head) "
+                             "(docs/scale.md; pip install 'homebot[ray]')")
+
+
+class _RayOption(argparse.Action):
+    """``--ray [ADDRESS]``, refused as it is parsed when the ray package is missing."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        from agent.app.runtime.ray_backend import RayError, ray_module
+
+        try:
+            ray_module()
+        except RayError as error:
+            parser.error(str(error))
+        setattr(namespace, self.dest, values)
 
 
 def load_settings(args: argparse.Namespace) -> Config:

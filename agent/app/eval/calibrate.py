@@ -59,7 +59,8 @@ def episodes_path(out: Path) -> Path:
 
 
 def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: Config,
-                    worlds: list[WorldAddress] | None = None, recordings: Path | None = None) -> list[dict[str, Any]]:
+                    worlds: list[WorldAddress] | None = None, recordings: Path | None = None,
+                    ray: str | None = None) -> list[dict[str, Any]]:
     """Run what is missing from ``results_path`` (refusing to mix policies) and return every job's result.
 
     Args:
@@ -69,17 +70,19 @@ def run_full_budget(jobs: list[Job], results_path: Path, workers: int, config: C
         config: the settings.
         worlds: the worlds to run in (started here when None).
         recordings: where to keep each episode's run folder with its Rerun recording (None: none kept).
+        ray: run each episode as a Ray task (`run_jobs`): `ray_backend.LOCAL` or a cluster's address;
+            None: in worker processes here.
 
     Returns:
         The results, in job order.
     """
     _check_same_policy(results_path.with_suffix(".json"), config)
-    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings)
+    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings, ray)
     return results_for(jobs, results_path)
 
 
 def calibrate(suite: Path, out: Path, workers: int, config: Config, limit: int | None = None,
-              worlds: list[WorldAddress] | None = None) -> Calibration:
+              worlds: list[WorldAddress] | None = None, ray: str | None = None) -> Calibration:
     """Run the calibration episodes still missing, then write the calibration file ``out``.
 
     Args:
@@ -89,12 +92,14 @@ def calibrate(suite: Path, out: Path, workers: int, config: Config, limit: int |
         config: the settings.
         limit: the most entries used (all when None).
         worlds: the worlds to run in (started here when None).
+        ray: run each episode as a Ray task (`run_jobs`): `ray_backend.LOCAL` or a cluster's address;
+            None: in worker processes here.
 
     Returns:
         The calibration written.
     """
     jobs = full_budget_jobs(suite, config, limit)
-    results = run_full_budget(jobs, episodes_path(out), workers, config, worlds)
+    results = run_full_budget(jobs, episodes_path(out), workers, config, worlds, ray=ray)
     episodes = [CalibrationEpisode(r["id"], r["seed"], r["ground_truth"], r["step_scores"])
                 for r in results if r["status"] != "failed" and r["step_scores"]]
     failed = [r["id"] for r in results if r["status"] == "failed" or not r["step_scores"]]

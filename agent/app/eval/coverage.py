@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import sys
 import time
 from collections.abc import Callable, Iterable
@@ -24,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from agent.acsg.metrics import mean_and_sem
-from agent.app.eval.runner import read_results
+from agent.app.eval.runner import append_results, read_results
 from agent.lfe.methods import Method
 from agent.app.runtime.pool import as_finished
 
@@ -159,7 +158,8 @@ def run_job(job: CoverageJob, model: Path | None) -> dict[str, Any]:
 
 def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str], workers: int = 1,
                       model: Path | None = None, steps: int = 500,
-                      progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> dict[str, Any]:
+                      progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+                      ray: str | None = None) -> dict[str, Any]:
     """Run the episodes not yet in ``<out_dir>/coverage-results.jsonl``; return the table.
 
     Args:
@@ -170,6 +170,8 @@ def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str]
         model: the network file (the shipped one when None).
         steps: each episode's steps.
         progress: called with (done, total, row) after each episode, if given.
+        ray: run each episode as a Ray task of one CPU (`agent.app.runtime.pool.as_finished`):
+            `ray_backend.LOCAL` or a cluster's address; None: in worker processes here.
 
     Returns:
         The table (`coverage_table`), the rows, the results file and the episode count.
@@ -195,12 +197,8 @@ def evaluate_coverage(out_dir: Path, homes_per_size: int, methods: Iterable[str]
     done = {_key(r) for r in read_results(path)}
     wanted = jobs(homes_per_size, methods, steps, model_digest(model))
     todo = [job for job in wanted if job.key not in done]
-    with open(path, "a", encoding="utf-8") as out:
-        for number, (_, row) in enumerate(as_finished(run_job, [(job, model) for job in todo], workers), start=1):
-            out.write(json.dumps(row) + "\n")
-            out.flush()
-            if progress:
-                progress(number, len(todo), row)
+    model = model.resolve() if model is not None else None  # a Ray task may run in another folder
+    append_results(path, as_finished(run_job, [(job, model) for job in todo], workers, ray), len(todo), progress)
     keys = {job.key for job in wanted}
     rows = [r for r in read_results(path) if _key(r) in keys]
     return {"table": coverage_table(rows, methods), "rows": rows, "results": str(path), "n": len(rows)}

@@ -16,7 +16,6 @@ The executor says what perceives and acts:
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from collections.abc import Callable, Iterable
@@ -29,7 +28,7 @@ from agent.acsg.interactive_exploration import explore
 from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import episode_metrics, mean_and_sem
 from agent.acsg.symbolic import SymbolicScene
-from agent.app.eval.runner import read_results
+from agent.app.eval.runner import append_results, read_results
 from agent.app.eval.tabletop_recording import record_graph
 from agent.app.runtime.pool import as_finished
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
@@ -89,7 +88,7 @@ def run_scene(executor: str, task: str, seed: int, recordings: Path | None = Non
 def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: int = VARIANTS,
                          executor: str = "symbolic",
                          progress: Callable[[int, int, dict[str, Any]], None] | None = None,
-                         workers: int = 1, recordings: Path | None = None) -> dict[str, Any]:
+                         workers: int = 1, recordings: Path | None = None, ray: str | None = None) -> dict[str, Any]:
     """Run the scenes not yet in ``<out_dir>/interactive-results.jsonl``; return the per-task table.
 
     Args:
@@ -100,6 +99,8 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
         progress: called with (done, total, row) after each scene, if given.
         workers: scenes run at once.
         recordings: where to keep each scene's Rerun recording of its explored graph, or None.
+        ray: run each scene as a Ray task of one CPU (`agent.app.runtime.pool.as_finished`):
+            `ray_backend.LOCAL` or a cluster's address; None: in worker processes here.
 
     Returns:
         The table, the results file and the scene count.
@@ -121,13 +122,9 @@ def evaluate_interactive(out_dir: Path, tasks: Iterable[str] = TASKS, variants: 
     path = out_dir / "interactive-results.jsonl"
     done = {(r["task"], r["seed"], r["executor"]) for r in read_results(path)}
     todo = [(task, seed) for task in tasks for seed in range(variants) if (task, seed, executor) not in done]
-    with open(path, "a", encoding="utf-8") as out:
-        calls = [(executor, task, seed, recordings) for task, seed in todo]  # scenes in processes of their own
-        for number, (_, row) in enumerate(as_finished(run_scene, calls, workers), start=1):
-            out.write(json.dumps(row) + "\n")
-            out.flush()
-            if progress:
-                progress(number, len(todo), row)
+    recordings = recordings.resolve() if recordings is not None else None  # a Ray task may run in another folder
+    calls = [(executor, task, seed, recordings) for task, seed in todo]  # scenes in processes of their own
+    append_results(path, as_finished(run_scene, calls, workers, ray), len(todo), progress)
     wanted = {(task, seed) for task in tasks for seed in range(variants)}
     rows = [r for r in read_results(path) if r["executor"] == executor and (r["task"], r["seed"]) in wanted]
     return {"table": table(rows, tasks), "results": str(path), "n": len(rows)}

@@ -1,7 +1,7 @@
 """`homebot lfe data`: the frontier-property network's training data, many homes side by side.
 
 Each home's samples come from `agent.lfe.samples.home_samples`; here the homes are handed out to
-worker processes (`agent.app.runtime.pool`) and each home's arrays are written as one shard
+worker processes or Ray tasks (`agent.app.runtime.pool`) and each home's arrays are written as one shard
 (`agent.lfe.shards`) as soon as it finishes. Shards are written whole (a temporary file, then a
 rename), so a run that is stopped leaves no half shard, and a rerun skips the homes whose shard
 is there.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,7 +46,8 @@ class DatasetSummary:
 
 
 def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = DataConfig(), workers: int = 1,
-                     progress: Callable[[int, int, int | None], None] | None = None) -> DatasetSummary:
+                     progress: Callable[[int, int, int | None], None] | None = None,
+                     ray: str | None = None) -> DatasetSummary:
     """Write one shard per seed into ``out_dir``, skipping the seeds whose shard is there.
 
     With ``workers`` > 1, homes are explored in that many processes and each shard is written as
@@ -60,6 +62,9 @@ def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = D
         progress: called as ``progress(done, total, samples)`` once per home, skipped ones first,
             with the maps this call recorded in it (None for a skipped home, so that an estimate
             of the time left can leave those out).
+        ray: explore each home as a Ray task of one CPU (`agent.app.runtime.pool.as_finished`),
+            its arrays coming back to be written here: `ray_backend.LOCAL` or a cluster's address;
+            None: in worker processes here.
 
     Returns:
         What was written and skipped.
@@ -84,12 +89,13 @@ def generate_dataset(out_dir: Path, seeds: Sequence[int], config: DataConfig = D
         if progress is not None:
             progress(done, len(unique), None)
     written, snapshots, pixels = [], 0, 0
-    for (seed, _), arrays in as_finished(home_samples, [(seed, config) for seed in todo], workers):
-        write_shard(shard_path(out_dir, seed), arrays)
-        written.append(seed)
-        snapshots += len(arrays["maps"])
-        pixels += len(arrays["pixels"])
-        done += 1
-        if progress is not None:
-            progress(done, len(unique), len(arrays["maps"]))
+    with closing(as_finished(home_samples, [(seed, config) for seed in todo], workers, ray)) as homes:
+        for (seed, _), arrays in homes:
+            write_shard(shard_path(out_dir, seed), arrays)
+            written.append(seed)
+            snapshots += len(arrays["maps"])
+            pixels += len(arrays["pixels"])
+            done += 1
+            if progress is not None:
+                progress(done, len(unique), len(arrays["maps"]))
     return DatasetSummary(out_dir, tuple(written), tuple(skipped), snapshots, pixels, time.monotonic() - started)

@@ -48,7 +48,7 @@ def explore_jobs(suite: Path, methods: list[str], limit: int | None) -> list[Job
 
 def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: int, config: Config,
                      limit: int | None = None, worlds: list[WorldAddress] | None = None,
-                     recordings: Path | None = None) -> dict[str, Any]:
+                     recordings: Path | None = None, ray: str | None = None) -> dict[str, Any]:
     """Run what is missing, then write ``curves.csv`` and ``curves.png``; return the curves.
 
     Args:
@@ -60,13 +60,15 @@ def evaluate_explore(suite: Path, methods: list[str], out_dir: Path, workers: in
         limit: the most entries used (all when None).
         worlds: the worlds to run in (started here when None).
         recordings: where to keep each episode's run folder with its Rerun recording (None: none kept).
+        ray: run each episode as a Ray task (`run_jobs`): `ray_backend.LOCAL` or a cluster's address;
+            None: in worker processes here.
 
     Returns:
         Every panel's curves by method, the τ grid, the episodes counted, the failures, the results file.
     """
     jobs = explore_jobs(suite, methods, limit)
     results_path = out_dir / "explore-results.jsonl"
-    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings)
+    run_jobs(jobs, results_path, workers, config, stderr_progress(time.monotonic()), worlds, recordings, ray)
     results = results_for(jobs, results_path)
     for result in results:
         result["method"] = result["variant"]

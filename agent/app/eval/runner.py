@@ -4,14 +4,17 @@ Each worker process starts one world child process of its own and resets it per 
 world's start-up is paid once per worker, not once per episode (a world that ends fails the episode
 it ended in, saying how, and the worker starts another for the next). Given running worlds instead
 (``homebot world`` on other machines, each named by its Zenoh endpoint), one worker joins each of
-them, so the same command spreads its episodes over several machines. Results go to a JSON-lines file,
-one line per finished episode, flushed at once; a rerun skips the (scenario, variant) pairs already
-in the file, so an interrupted evaluation loses nothing and redoes nothing.
+them, so the same command spreads its episodes over several machines. On a Ray cluster (``--ray``)
+each episode is instead a task that starts its own world on the node it lands on (or joins a listed
+world that no other task is using), and Ray runs it again when its worker or node dies. Results go
+to a JSON-lines file, one line per finished episode, flushed at once; a rerun skips the (scenario,
+variant) pairs already in the file, so an interrupted evaluation loses nothing and redoes nothing.
 """
 
 from __future__ import annotations
 
 import atexit
+import functools
 import json
 import logging
 import multiprocessing
@@ -19,8 +22,8 @@ import os
 import sys
 import tempfile
 import time
-from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from collections.abc import Callable, Iterator
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,7 +33,8 @@ from worlds.bus.liveness import describe_exit
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
 from agent.app.runtime.episode_bus import EpisodeBus
-from agent.app.runtime.pool import quiet_worker, sigint_held, stop_workers
+from agent.app.runtime import ray_backend
+from agent.app.runtime.pool import in_processes, quiet_worker
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
 
@@ -109,18 +113,25 @@ def read_results(path: Path) -> list[dict[str, Any]]:
 
 def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Config,
              progress: Callable[[int, int, dict[str, Any]], None] | None = None,
-             worlds: list[WorldAddress] | None = None, recordings: Path | None = None) -> int:
-    """Run the jobs not yet in ``results_path`` in worker processes, appending each result as it ends.
+             worlds: list[WorldAddress] | None = None, recordings: Path | None = None,
+             ray: str | None = None) -> int:
+    """Run the jobs not yet in ``results_path``, appending each result as it ends.
 
     Args:
         jobs: the episodes to run.
         results_path: the results file (JSON lines), created or appended to.
-        workers: how many worker processes, each starting its own world; ignored with ``worlds``.
+        workers: how many worker processes, each starting its own world; ignored with ``worlds``;
+            with ``ray``, the episodes at once on a Ray cluster started here.
         base_config: the settings every job's overrides apply to.
         progress: called after each episode with (done, of how many, its result).
         worlds: running worlds to join instead, one worker each.
         recordings: where to keep each episode's run folder with its Rerun recording
             (``<recordings>/<id>-<variant>/recording.rrd``); None keeps no recording.
+        ray: run each episode as a Ray task (`ray_backend.LOCAL`: on a cluster started here,
+            else on the one at this address; None: worker processes here). A task starts its own
+            world on the node it lands on (`run_in_own_world`), declaring ``ray.cpus_per_episode``
+            CPUs; with ``worlds``, it joins one no other task is using (`run_in_world`), declaring
+            ``ray.cpus_per_agent``, so that as many episodes run at once as there are worlds.
 
     Returns:
         How many jobs ran now (0 when the file held them all).
@@ -130,32 +141,41 @@ def run_jobs(jobs: list[Job], results_path: Path, workers: int, base_config: Con
     results_path.parent.mkdir(parents=True, exist_ok=True)
     if not todo:
         return 0
-    _repair_torn_tail(results_path)
-    context = multiprocessing.get_context("spawn")
-    addresses = context.Queue()
-    for address in worlds or []:
-        addresses.put(address)
-    with open(results_path, "a", encoding="utf-8") as out, ProcessPoolExecutor(
-        max_workers=len(worlds) if worlds else workers, mp_context=context, initializer=_start_worker_world,
-        initargs=(base_config, addresses if worlds else None),
-    ) as pool:
-        finished = 0
-        try:
-            with sigint_held():
-                pending = {pool.submit(_run_job, job, base_config, recordings) for job in todo}
-            while pending:
-                complete, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in complete:
-                    result = future.result()
-                    out.write(json.dumps(result, ensure_ascii=False) + "\n")
-                    out.flush()
-                    finished += 1
-                    if progress:
-                        progress(finished, len(todo), result)
-        except KeyboardInterrupt:
-            stop_workers(pool)
-            raise
+    calls = [(job, base_config, recordings.resolve() if recordings else None) for job in todo]
+    if ray is not None:
+        function, cpus = ((run_in_world, base_config.ray.cpus_per_agent) if worlds else
+                          (run_in_own_world, base_config.ray.cpus_per_episode))
+        finished = ray_backend.as_finished(function, calls, ray, cpus, len(worlds) if worlds else workers,
+                                           worlds or None)
+    else:
+        addresses = multiprocessing.get_context("spawn").Queue()
+        for address in worlds or []:
+            addresses.put(address)
+        finished = in_processes(_run_job, calls, len(worlds) if worlds else workers, _start_worker_world,
+                                (base_config, addresses if worlds else None))
+    append_results(results_path, finished, len(todo), progress)
     return len(todo)
+
+
+def append_results(path: Path, finished: Iterator[tuple[Any, dict[str, Any]]], total: int,
+                   progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> None:
+    """Append each result to a results file as its call finishes, one JSON line flushed at once, so
+    that a run stopped at any point keeps every whole line (and a torn one from before is cut).
+
+    Args:
+        path: the results file (JSON lines), created or appended to.
+        finished: (arguments, result) as each call finishes (`agent.app.runtime.pool.as_finished`);
+            closed when this returns or raises, so that the calls not finished are cancelled.
+        total: the calls in all, for ``progress``.
+        progress: called after each result with (done, ``total``, the result).
+    """
+    _repair_torn_tail(path)
+    with closing(finished), open(path, "a", encoding="utf-8") as out:
+        for done, (_, result) in enumerate(finished, start=1):
+            out.write(json.dumps(result, ensure_ascii=False) + "\n")
+            out.flush()
+            if progress:
+                progress(done, total, result)
 
 
 def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None]:
@@ -190,6 +210,24 @@ def results_for(jobs: list[Job], results_path: Path) -> list[dict[str, Any]]:
     """
     by_key = {(r["id"], r["variant"]): r for r in read_results(results_path)}
     return [by_key[job.key] for job in jobs if job.key in by_key]
+
+
+#: The fields of a result line that time the episode: the one thing two runs of a job may differ in.
+TIMING_FIELDS = ("seconds",)
+
+
+def comparable(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Results as two runs of the same jobs must give them, whichever ran them and in whatever order:
+    by (entry id, variant), without `TIMING_FIELDS`.
+
+    Args:
+        results: result lines.
+
+    Returns:
+        The same lines, sorted, the timing left out.
+    """
+    return sorted(({key: value for key, value in result.items() if key not in TIMING_FIELDS} for result in results),
+                  key=lambda result: (result["id"], result["variant"]))
 
 
 def _repair_torn_tail(path: Path) -> None:
@@ -267,20 +305,66 @@ def _live_world(config: Config) -> WorkerWorld:
 
 
 def _run_job(job: Job, base_config: Config, recordings: Path | None = None) -> dict[str, Any]:
-    """One episode in this worker's world, its run folder (and recording) kept under ``recordings``
-    when given; any failure is a result with its reason, never a crash."""
+    """One episode in this pool worker's world (`_live_world`)."""
+    return _episode_record(job, base_config, recordings, _live_world(base_config))
+
+
+def run_in_own_world(job: Job, base_config: Config, recordings: Path | None = None) -> dict[str, Any]:
+    """One episode with a world of its own, started beside it and stopped when it ends, in any
+    process: a Ray task's, on whichever node it lands. The world also ends if this process is
+    killed (`WorldProcess`), so that a task Ray ends or runs again leaves none behind.
+
+    Args:
+        job: the episode.
+        base_config: the settings the job's overrides apply to.
+        recordings: where to keep its run folder with its Rerun recording (None: none kept).
+
+    Returns:
+        Its result line; any failure is a result with its reason, never a crash.
+    """
+    return _episode_record(job, base_config, recordings, None)
+
+
+def run_in_world(job: Job, base_config: Config, recordings: Path | None, world: WorldAddress) -> dict[str, Any]:
+    """One episode in a running world that no other episode uses meanwhile, from any process: a Ray
+    task's, on whichever node it lands (`run_jobs` hands each world to one task at a time).
+
+    Args:
+        job: the episode.
+        base_config: the settings the job's overrides apply to.
+        recordings: where to keep its run folder with its Rerun recording (None: none kept).
+        world: the world to join.
+
+    Returns:
+        Its result line; any failure is a result with its reason, never a crash.
+    """
+    return _episode_record(job, base_config, recordings, WorkerWorld(world.namespace, world.endpoint, _scratch()))
+
+
+@functools.cache
+def _scratch() -> Path:
+    """Where this process's episodes with worlds of their own put their run folders, world logs among them."""
+    return Path(tempfile.mkdtemp(prefix="homebot-eval-"))
+
+
+def _episode_record(job: Job, base_config: Config, recordings: Path | None, world: WorkerWorld | None
+                    ) -> dict[str, Any]:
+    """One episode in ``world`` (None: a world of its own), its run folder (and recording) kept under
+    ``recordings`` when given; any failure is a result with its reason, never a crash."""
     started = time.monotonic()
     config = load_config(overrides=list(job.overrides), base=base_config)
-    world = _live_world(base_config)
-    request = RunRequest(seed=job.seed, config=config, out_root=recordings or world.scratch, connect=world.endpoint,
-                         namespace=world.namespace, run_id=f"{job.entry_id}-{job.variant}",
-                         scenario=job.scenario, save_map=False, record=recordings is not None)
+    request = RunRequest(seed=job.seed, config=config, out_root=recordings or (world.scratch if world else _scratch()),
+                         connect=world.endpoint if world else None,
+                         namespace=world.namespace if world else f"homebot/eval-{os.getpid()}",
+                         run_id=f"{job.entry_id}-{job.variant}", scenario=job.scenario, save_map=False,
+                         record=recordings is not None)
+    joined = world.process if world else None  # the worker's own world, which may still be starting
     try:
-        if world.process is not None:  # it may still be starting
-            world.process.wait_listening(config.bus.world_start_timeout_s)
+        if joined is not None:
+            joined.wait_listening(config.bus.world_start_timeout_s)
         bus = EpisodeBus.open(request)
-        if world.process is not None:
-            bus.follow(world.process)
+        if joined is not None:
+            bus.follow(joined)
         result = run_episode(request, bus=bus)
     except (RunError, WorldStartError) as error:
         result = {"status": "failed", "reason": str(error), "step_scores": []}

@@ -201,7 +201,7 @@ def reach_table(points: list[SweepPoint]) -> list[dict[str, Any]]:
 
 def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: int, config: Config,
                   limit: int | None = None, worlds: list[WorldAddress] | None = None,
-                  recordings: Path | None = None) -> dict[str, Any]:
+                  recordings: Path | None = None, ray: str | None = None) -> dict[str, Any]:
     """Run the test episodes still missing, replay every rule, and write the CSVs and the figure.
 
     Args:
@@ -213,6 +213,8 @@ def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: i
         limit: the most entries used (all when None).
         worlds: the worlds to run in (started here when None).
         recordings: where to keep each episode's run folder with its Rerun recording (None: none kept).
+        ray: run each episode as a Ray task (`run_jobs`): `ray_backend.LOCAL` or a cluster's address;
+            None: in worker processes here.
 
     Returns:
         The sweep's points, the coverage and reach tables, and the episode count.
@@ -224,7 +226,8 @@ def evaluate_stop(suite: Path, calibration_path: Path, out_dir: Path, workers: i
     calibration = read_calibration(calibration_path)
     check_fits(calibration, calibration_path, config)
     jobs = full_budget_jobs(suite, config, limit)
-    results = usable(run_full_budget(jobs, out_dir / "stop-episodes.jsonl", workers, config, worlds, recordings))
+    results = usable(run_full_budget(jobs, out_dir / "stop-episodes.jsonl", workers, config, worlds, recordings,
+                                      ray))
     if not results:
         raise ValueError(f"no test episode finished; see {out_dir / 'stop-episodes.jsonl'}")
     points = sweep(results, calibration)

@@ -1,9 +1,10 @@
-"""Independent calls run one after another, or side by side in worker processes.
+"""Independent calls run one after another, side by side in worker processes, or as Ray tasks.
 
 Evaluations and data generation hand out whole episodes or homes, each a few seconds to minutes of
-CPU; results are wanted as each finishes, so that they can be appended and shown at once. Workers
-are spawned, never forked: the caller may hold threads, Zenoh sessions or PyBullet clients that a
-fork would copy in a broken state.
+CPU; results are wanted as each finishes, so that they can be appended and shown at once. `as_finished`
+is the one place that hands them out: here, to spawned processes (`in_processes`), or to a Ray
+cluster (`agent.app.runtime.ray_backend`, with ``--ray``). Workers are spawned, never forked: the
+caller may hold threads, Zenoh sessions or PyBullet clients that a fork would copy in a broken state.
 
 Ctrl-C is the caller's to handle: workers ignore SIGINT (they are spawned with it blocked, so one
 that comes while they start and import waits until `quiet_worker` ignores it), and on it the caller
@@ -27,45 +28,79 @@ from typing import Any, TypeVar
 Result = TypeVar("Result")
 
 
-def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]], workers: int
-                ) -> Iterator[tuple[tuple[Any, ...], Result]]:
+def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]], workers: int,
+                ray: str | None = None, cpus: float = 1.0) -> Iterator[tuple[tuple[Any, ...], Result]]:
     """(arguments, ``function(*arguments)``) for each of ``calls``, as each finishes.
 
-    With one worker (or one call) they run here, in order; otherwise in up to ``workers`` spawned
-    processes, so ``function`` and its arguments must be importable and picklable. Calls not yet
-    started are cancelled when the caller stops early.
+    With ``ray``, each call is a Ray task (`agent.app.runtime.ray_backend`). Otherwise, with one
+    worker (or one call) they run here, in order, and else in up to ``workers`` spawned processes
+    (`in_processes`). Either way ``function`` and its arguments must be importable and picklable,
+    and the calls not finished are cancelled when the caller stops early (close the iterator, as
+    `contextlib.closing` does, so that this happens at once).
 
     Args:
         function: what each call runs.
         calls: each call's arguments.
-        workers: processes at most.
+        workers: processes at most; with ``ray``, the size of a cluster started here.
+        ray: None for processes here; `ray_backend.LOCAL` to start a Ray cluster here, or the
+            address of one to join.
+        cpus: the CPUs each call uses, which a Ray task declares.
 
     Yields:
         Each call's arguments and result.
 
     Raises:
         ValueError: fewer than one worker.
+        agent.app.runtime.ray_backend.RayError: Ray is missing, or its cluster cannot be had.
     """
     if workers < 1:
         raise ValueError(f"workers: {workers} must be at least 1")
-    if workers == 1 or len(calls) <= 1:
+    if ray is not None:
+        from agent.app.runtime import ray_backend
+
+        yield from ray_backend.as_finished(function, calls, ray, cpus, workers)
+    elif workers == 1 or len(calls) <= 1:
         for arguments in calls:
             yield arguments, function(*arguments)
+    else:
+        yield from in_processes(function, calls, workers)
+
+
+def in_processes(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]], workers: int,
+                 initializer: Callable[..., None] | None = None, initargs: tuple[Any, ...] = ()
+                 ) -> Iterator[tuple[tuple[Any, ...], Result]]:
+    """(arguments, ``function(*arguments)``) for each of ``calls``, run in up to ``workers`` spawned
+    processes, as each finishes; on Ctrl-C, or once the caller stops early, the calls not started
+    are cancelled and the running ones ended (`stop_workers`).
+
+    Args:
+        function: what each call runs.
+        calls: each call's arguments.
+        workers: processes at most.
+        initializer: what each process runs first, `quiet_worker` when None; another must call it.
+        initargs: its arguments.
+
+    Yields:
+        Each call's arguments and result.
+    """
+    if not calls:
         return
     pool = ProcessPoolExecutor(min(workers, len(calls)), mp_context=multiprocessing.get_context("spawn"),
-                               initializer=quiet_worker)
+                               initializer=initializer or quiet_worker, initargs=initargs)
+    finished = False
     try:
         with sigint_held():
             pending = {pool.submit(function, *arguments): arguments for arguments in calls}
         while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
                 yield pending.pop(future), future.result()
-    except KeyboardInterrupt:
-        stop_workers(pool)
-        raise
+        finished = True
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        if finished:
+            pool.shutdown(wait=True)
+        else:  # Ctrl-C, a call that raised, or a caller that asks for no more
+            stop_workers(pool)
 
 
 def quiet_worker() -> None:
@@ -98,9 +133,10 @@ def _end_worker(*_: object) -> None:
 
 
 def stop_workers(pool: ProcessPoolExecutor, grace_s: float = 5.0) -> None:
-    """After Ctrl-C: cancel the calls not yet started and end the running ones: SIGTERM, and SIGKILL
-    for a worker still there after ``grace_s`` (one blocked in a call that never returns to Python,
-    a query to a world the same Ctrl-C ended, would otherwise hold the pool's shutdown forever).
+    """After Ctrl-C (or a call that raised, or a caller that wants no more): cancel the calls not yet
+    started and end the running ones: SIGTERM, and SIGKILL for a worker still there after
+    ``grace_s`` (one blocked in a call that never returns to Python, a query to a world the same
+    Ctrl-C ended, would otherwise hold the pool's shutdown forever).
 
     Args:
         pool: a pool whose workers ran `quiet_worker`.

@@ -26,6 +26,7 @@ class WorldProcess:
     """A `worlds.server` child listening on ``endpoint`` under ``namespace``; its log goes to a file,
     which starts with the command that started it, so a world that ends before it writes a line
     still leaves one (its Python output is unbuffered, so nothing it wrote is lost if it is killed).
+    The world ends with this process (``--parent``): one whose parent is killed is not left behind.
 
     Args:
         namespace: the bus namespace.
@@ -47,6 +48,7 @@ class WorldProcess:
             sys.executable, "-m", "worlds.server",
             "--namespace", namespace,
             "--listen", endpoint,
+            "--parent", str(os.getpid()),
             *(word for other in connect or [] for word in ("--connect", other)),
             *(("--seed", str(seed)) if seed is not None else ()),
             *(("--zenoh-config", zenoh_config) if zenoh_config else ()),
