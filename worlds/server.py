@@ -325,7 +325,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, help="reset to this home at start")
     parser.add_argument("--parent", type=int, metavar="PID",
                         help="the process that started this world: end when it has ended, so that a world "
-                             "is never left behind by one that was killed")
+                             "is never left behind by one that was killed; Ctrl-C (SIGINT) is then left to it")
     parser.add_argument("--zenoh-config", metavar="FILE",
                         help="a Zenoh configuration file (JSON5): TLS with mutual authentication, access "
                              "control; its listen/connect endpoints, where it sets them, replace these "
@@ -337,7 +337,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command-line entry: serve until SIGTERM or SIGINT.
+    """Command-line entry: serve until SIGTERM, or SIGINT unless started by a ``--parent``.
 
     Args:
         argv: the arguments, else the process's.
@@ -361,8 +361,10 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--zenoh-config: {error}")
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(levelname)s %(message)s")
     stop = threading.Event()
-    for signum in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(signum, lambda *_: stop.set())
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    # A world with a parent is the parent's to stop: Ctrl-C in a terminal reaches the whole process
+    # group, and a world that ended on it first would fail the episode its parent is interrupting.
+    signal.signal(signal.SIGINT, signal.SIG_IGN if args.parent is not None else lambda *_: stop.set())
     if args.parent is not None:
         threading.Thread(target=end_with_parent, args=(args.parent, stop), name="parent watch", daemon=True).start()
     try:
