@@ -437,23 +437,22 @@ def test_a_drawer_far_from_its_chests_carcass_is_attached_to_the_piece_it_stands
     assert stray_i.parent is None and all(stray_i.id not in c.children for c in (chest, cabinet_i, wall_i))
 
 
-# --- suspected bugs, kept as strict expected failures (see the docstrings) ------------------------
-
-
-@pytest.mark.xfail(strict=True, reason="the spanning detection is absorbed whole into one of the two "
-                   "co-visible instances, which then takes every later view of the other")
 def test_after_a_spanning_detection_each_drawer_still_gets_its_own_views() -> None:
-    """Not merging the two drawers is not enough: `integrate_frame` still folds the spanning detection
-    into the best match (the lower drawer), whose voxels then cover the upper one too. Every later
-    detection of the upper drawer has containment 1 with both and goes to the lower id (ties break
-    by id), so the upper instance is never updated again: a ghost."""
+    """Not merging the two drawers is not enough: a detection spanning both, folded whole into the
+    best match (the lower drawer), made its voxels cover the upper one too; every later detection of
+    the upper drawer then had containment 1 with both and went to the lower id (ties break by id),
+    and the upper instance was never updated again: a ghost, and what the upper drawer held was read
+    as the lower's. The spanning detection is now cut between the drawers it spans."""
     memory = InstanceMemory()
     _see(memory, [LOWER, UPPER], FRONT_EYE, FRONT_TARGET)
     lower, upper = _holding(memory, "drawer", LOWER), _holding(memory, "drawer", UPPER)
-    _see(memory, _both_as_one(), FRONT_EYE, FRONT_TARGET)
+    spanning = _see(memory, _both_as_one(), FRONT_EYE, FRONT_TARGET)
+    assert set(spanning.updated) == {lower.id, upper.id} and spanning.absorbed == {}
     update = _see(memory, [UPPER], FRONT_EYE, FRONT_TARGET)
     assert upper.id in update.updated and upper.last_seen == memory.frame
+    assert lower.id not in update.updated
     assert lower.bounds[1][2] < 0.96  # the lower drawer's box stays on the lower front
+    assert upper.bounds[0][2] > 0.94 and lower.hint == LOWER.id and upper.hint == UPPER.id
 
 
 def test_a_cup_on_the_table_beside_an_open_door_is_not_inside_the_cabinet() -> None:
