@@ -14,7 +14,8 @@ from agent.perception.part_motion import moved_geometry
 from skills.arm.arm_model import READY
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
-from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance, hand_bottom
+from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
+                               hand_bottom)
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -222,6 +223,21 @@ def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner
     assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), grasp)  # lifted from the top, not from below
     release = _tcp(planner, steps["lower"].samples[-1])
     assert release[:3, 3] == pytest.approx(place + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
+
+
+def test_a_wide_box_whose_middle_is_out_of_reach_is_lifted_by_its_near_edge(planner: ArmPlanner) -> None:
+    # A 30 cm box 0.92 m out from the base's axis: no hand above its middle reaches (IK fell 15 cm
+    # short of one in a scene), but the top just inside its near edge is 0.8 m out.
+    top, place, size = np.array([0.3, 0.2, 0.87]), np.array([0.6, -0.2, 0.87]), (0.3, 0.3, 0.115)
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE)
+    assert plan.info["grasp"] == "fingertips-on-near-edge"
+    _check_runnable(plan, np.array(STOWED))
+    edge = np.array([0.0, -(0.15 - EDGE_INSET_M), 0.0])  # towards the robot, which faces +y
+    assert plan.info["grasp_pose"][:3, 3] == pytest.approx(top + edge + [0, 0, FINGERTIP_M], abs=1e-9)
+    steps = {step.name: step for step in plan.steps}
+    assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), plan.info["grasp_pose"])
+    release = _tcp(planner, steps["lower"].samples[-1])  # carried by its edge: the edge goes as far
+    assert release[:3, 3] == pytest.approx(place + edge + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
 
 
 def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_place(planner: ArmPlanner) -> None:

@@ -16,7 +16,11 @@ object, closing across it) cannot:
   level grasp pulls it;
 - an object's top (`object_grasps`): an object wider than the opening (an open-bottom box, a jar,
   a bottle) is held by the closed fingertips on its top (a box's lid), the fingers closing along
-  the directions the usual grasp would, best first.
+  the directions the usual grasp would, best first; then, for a box whose middle is out of reach
+  (a wide box at the table's far side: the hand above its middle fell 15 cm short), on the top
+  just inside its near edge (`EDGE_INSET_M`), straight down and leaning back towards the robot
+  (`EDGE_PITCH`). The world carries what the fingers hold as it was held, so a box held by its
+  edge is lifted straight up like one held by its middle.
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
@@ -32,7 +36,7 @@ and `front_clearance` (how far the hand stays in front of a part's front).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -63,6 +67,11 @@ LEVEL_SIN = 0.1
 #: the centre of a bar's voxels lies within a few millimetres of its axis when its face and top
 #: are both seen.
 HANDLE_DEPTH_M = 0.0
+#: How far inside a top's near edge (m) fingertips rest when its middle is out of reach.
+EDGE_INSET_M = 0.03
+#: How far (rad from straight down) the hand on a top's near edge leans back towards the robot:
+#: the wrist then stands nearer the base than the fingertips.
+EDGE_PITCH = math.radians(30.0)
 #: Level grasp variants tried in order: half turns about the gripper's axis, tilts about the
 #: handle's bar (negative: the gripper points down onto a level bar, the hand above it; `tilted`).
 FLIPS = (0.0, math.pi)
@@ -92,14 +101,17 @@ class ObjectGrasp:
     Args:
         rotation: the TCP's 3×3 rotation.
         depth: how far below the grasp point the TCP closes (negative: above it, the fingertips on the top).
-        name: as plans say it ("fingers-around", "fingertips-on-top").
+        name: as plans say it ("fingers-around", "fingertips-on-top", "fingertips-on-near-edge").
         touch: as for `HandleGrasp`.
+        offset: where on the top the grasp is, from its middle (world, horizontal); the thing is
+            carried by that point, so its release point shifts by as much.
     """
 
     rotation: np.ndarray
     depth: float
     name: str
     touch: bool = False
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
 _HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
@@ -323,10 +335,23 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
 
     Returns:
         The fingers around it along each of `closing_directions` it fits within ``opening``;
-        where it fits along none, the closed fingertips on its top along each.
+        where it fits along none, the closed fingertips on its top along each, then on its top
+        just inside the edge nearest the base (straight down, then leaning back by `EDGE_PITCH`),
+        the fingers closing across the line of sight, where that edge lies 1 cm or more from the middle.
     """
     directions = closing_directions(size, point, base_pose)
     around = [d for d in directions if across(size, d) <= opening]
     if around:
         return [ObjectGrasp(top_rotation(d), depth, "fingers-around") for d in around]
-    return [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
+    grasps = [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
+    sight = np.array([*(np.asarray(point[:2], dtype=float) - np.asarray(base_pose[:2], dtype=float)), 0.0])
+    if np.linalg.norm(sight) < 1e-6:
+        return grasps
+    sight /= np.linalg.norm(sight)
+    inset = across(size, sight) / 2 - EDGE_INSET_M
+    if inset < 0.01:
+        return grasps
+    closing = np.array([-sight[1], sight[0], 0.0])
+    return grasps + [ObjectGrasp(top_rotation(sign * closing, pitch, sight), -FINGERTIP_M, "fingertips-on-near-edge",
+                                 touch=True, offset=-inset * sight)
+                     for pitch in (0.0, EDGE_PITCH) for sign in (1.0, -1.0)]

@@ -66,8 +66,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     builder = PlanBuilder(arm, here, base_pose, surface_z)
     failures: list[str] = []
     for way in object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth):
-        grasp = pose_at(way.rotation, top - way.depth * UP)
-        release = pose_at(way.rotation, place + (clearance_m - way.depth) * UP)
+        grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
+        release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
         above_grasp, above_release = shifted(grasp, lift_m * UP), shifted(release, lift_m * UP)
         down = "down onto the object's top" if way.touch else "down onto the object"
         try:
