@@ -52,14 +52,14 @@ class Picks:
     Args:
         body: the robot's body.
         idle_toward_robot_m: how far from the object, towards the robot, the idle spot is sought first.
-        may_fold: whether the arm may fold in when the base touches something on a drive (see
-            `RobotBody.drive`), asked at each drive.
+        drive: drives the base to a pose knowing what the robot left open
+            (`skills.robot_parts.DoorsAndDrawers.drive`).
     """
 
-    def __init__(self, body: RobotBody, idle_toward_robot_m: float, may_fold: Callable[[], bool]) -> None:
+    def __init__(self, body: RobotBody, idle_toward_robot_m: float, drive: Callable[[Pose2D], None]) -> None:
         self.body = body
         self.idle_toward_robot_m = idle_toward_robot_m
-        self.may_fold = may_fold
+        self.drive = drive
         self.away: dict[int, Away] = {}
         self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
 
@@ -109,7 +109,7 @@ class Picks:
                              allowed_means="within the arm's reach")
         (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
-        body.drive(Pose2D(stand_x, edge_y, body.home.yaw), may_fold=self.may_fold())
+        self.drive(Pose2D(stand_x, edge_y, body.home.yaw))
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=place,
                           surface_z=float(spot[2]), label=f"{obj.label} {obj.id}")
@@ -137,7 +137,7 @@ class Picks:
         if away is None:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert body.home is not None  # set by the look before the pick away
-        body.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw), may_fold=self.may_fold())
+        self.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,

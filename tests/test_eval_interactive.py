@@ -43,7 +43,8 @@ def test_bad_options_are_named(tmp_path: Path, tasks, variants, executor, proble
 
 def test_any_seed_base_runs_its_own_variants(tmp_path: Path) -> None:
     report = evaluate_interactive(tmp_path, ["door-only"], 2, "symbolic", seed_base=5_000)
-    seeds = sorted(json.loads(line)["seed"] for line in (tmp_path / "interactive-results.jsonl").read_text().splitlines())
+    lines = (tmp_path / "interactive-results.jsonl").read_text().splitlines()
+    seeds = sorted(json.loads(line)["seed"] for line in lines)
     assert seeds == [5_000, 5_001] and report["seeds"] == [5_000, 5_001] and report["n"] == 2
     kept = json.loads((tmp_path / "interactive-report.json").read_text())
     assert kept["seeds"] == [5_000, 5_001] and kept["causes"] == {} and set(kept["table"]) == {"door-only"}

@@ -118,7 +118,8 @@ def split_seeds(split: str | None, variants: int | None, seed_base: int | None,
             raise ValueError(f"--split: {split!r} is not one of {', '.join(SPLITS)}")
         chosen = SPLITS[split]
         if seed_base is not None:
-            raise ValueError(f"--seed-base: the {split} split starts at {chosen.seed_base}; give a split or a seed base")
+            raise ValueError(f"--seed-base: the {split} split starts at {chosen.seed_base}; "
+                             "give a split or a seed base")
         if variants is not None and not 1 <= variants <= chosen.variants:
             raise ValueError(f"--variants: {variants} must be 1..{chosen.variants} for the {split} split")
         if record and split == "reported":
