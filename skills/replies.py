@@ -21,6 +21,9 @@ MIN_PART_SHARE = 0.6
 _EXPECTED = {
     "handle": (lambda label: label.get("category") == "handle", "not a handle"),
     "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
+    # lowering what the hand carries: it arrives where that meets what it is put on, which the
+    # world reports as nothing the arm touched; the arm itself touching anything is no arrival
+    "support": (lambda label: False, "the arm itself, not what it carries"),
 }
 
 
@@ -85,8 +88,9 @@ def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | N
         return _gripper_problem(step, state), None
     contacts = state["contacts"]
     stopped = state["stopped_on_contact"] or state["final_error"] > BLOCKED_RAD
-    if step.touch and stopped and all(_EXPECTED[step.touch][0](c) for c in contacts):
-        return "", None  # a touch grasp's approach found what it reaches for (or a touch too light to report)
+    carrying = step.touch != "support" or held is not None
+    if step.touch and stopped and carrying and all(_EXPECTED[step.touch][0](c) for c in contacts):
+        return "", None  # a touch's approach found what it reaches for (or a touch too light to report)
     if state["stopped_on_contact"]:
         touched = ", ".join(f"{thing_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
         return f"stopped on contact with {touched}", None

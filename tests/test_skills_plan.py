@@ -215,6 +215,7 @@ def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner
     assert steps["close the fingers"].expect_held is None and steps["grasp the object"].expect_held == "object"
     down = steps["down onto the object's top"]
     assert down.touch == "object" and down.stop_on_contact
+    assert steps["lower"].touch == "support"  # it arrives where the box meets what it is put on
     grasp = plan.info["grasp_pose"]
     assert grasp[:3, 2] @ [0, 0, -1] > 0.999
     assert grasp[:3, 3] == pytest.approx(top + [0, 0, FINGERTIP_M], abs=1e-9)  # the fingertips on the top

@@ -4,8 +4,9 @@ Above the object, down onto its top (the fingers closing across the line of sigh
 where the object fits that way, since perception places things worst along it; an object wider
 than the opening is held by the closed fingertips brought down onto its top until they touch,
 `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
-little above where it should (the world puts a released object down onto whatever is under it),
-open, back up, ready.
+little above where it should, or until it meets what it is put on first (a top a little higher
+than the memory had it holds the arm back without the arm touching anything: the world puts a
+released object down onto whatever is under it), open, back up, ready.
 """
 
 from __future__ import annotations
@@ -87,7 +88,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         builder.grasp(way, down, descent, grasp, "object")
         builder.move("lift", chain[2], careful=True, tcp_target=above_grasp)
         builder.move("carry", chain[3], careful=False, tcp_target=above_release)
-        builder.move("lower", chain[4], careful=True, tcp_target=release)
+        builder.move("lower", chain[4], careful=True, tcp_target=release, touch="support")
         builder.gripper("open", "put the object down")
         builder.move("back up", chain[5], careful=True, tcp_target=above_release)
         builder.free_move("to ready", arm.ready, via_ready=False)
