@@ -112,7 +112,7 @@ class Picks:
         self.drive(Pose2D(stand_x, edge_y, body.home.yaw))
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=place,
-                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}")
+                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:
             return SkillResult(False, result.reason)
         body.memory.move(obj.id, _translation(place - top))
@@ -142,7 +142,7 @@ class Picks:
         now = top_grasp_point(points) if len(points) else away.placed_point
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
-                          label=f"{obj.label} {obj.id}")
+                          label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:
             return SkillResult(False, result.reason)
         body.memory.move(obj.id, _translation(away.grasp_point - now))
@@ -150,6 +150,14 @@ class Picks:
         body.remembered(self.vacated, obj)
         self.vacated.pop(obj.id, None)
         return SkillResult(True)
+
+    def _near(self, obj: Instance) -> np.ndarray:
+        """The points of everything remembered but ``obj`` and the tables and counters: what the hand
+        picking it and putting it down is to keep off (a bottle beside the one picked, the handle
+        beside the place it goes back to)."""
+        surfaces = {inst.id for inst in self.body.surfaces()}
+        points = [inst.points() for inst in self.body.memory.live() if inst.id != obj.id and inst.id not in surfaces]
+        return np.vstack(points) if points else np.zeros((0, 3))
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from skills.arm.arm_model import READY
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
 from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
-                               hand_bottom)
+                               hand_bottom, hand_touches)
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -239,6 +239,20 @@ def test_a_wide_box_whose_middle_is_out_of_reach_is_lifted_by_its_near_edge(plan
     assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), plan.info["grasp_pose"])
     release = _tcp(planner, steps["lower"].samples[-1])  # carried by its edge: the edge goes as far
     assert release[:3, 3] == pytest.approx(place + edge + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
+
+
+def test_a_pick_keeps_the_hand_off_what_stands_beside_the_object(planner: ArmPlanner) -> None:
+    # A bottle 9 cm beside the one picked, across the line of sight: the hand closing across that
+    # line (the first choice), 21 cm across its fingers' travel, would come down on it.
+    top, place, size = np.array([0.3, -0.15, 0.9]), np.array([0.6, -0.2, 0.9]), (0.05, 0.05, 0.15)
+    first = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE)
+    closing = first.info["grasp_pose"][:3, 1]
+    xs, zs = np.meshgrid(np.linspace(-0.025, 0.025, 6), np.linspace(0.755, 0.9, 8))
+    neighbour = np.column_stack([xs.ravel(), np.zeros(xs.size), zs.ravel()]) + top * [1, 1, 0] + 0.09 * closing
+    clear = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE, keep_off=neighbour)
+    _check_runnable(clear, np.array(STOWED))
+    assert hand_touches(first.info["grasp_pose"], neighbour) > 0
+    assert hand_touches(clear.info["grasp_pose"], neighbour) == 0  # closing along the other way
 
 
 def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_place(planner: ArmPlanner) -> None:

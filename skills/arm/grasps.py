@@ -29,8 +29,9 @@ top was expected, and re-timed from where the arm stopped. Letting go of a bar s
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.
 
-Hand geometry for clearance checks: `hand_corners`, `hand_bottom` (what must stay above a table)
-and `front_clearance` (how far the hand stays in front of a part's front).
+Hand geometry for clearance checks: `hand_corners`, `hand_bottom` (what must stay above a table),
+`front_clearance` (how far the hand stays in front of a part's front) and `hand_touches` (what
+standing beside the thing grasped the hand would touch).
 """
 
 from __future__ import annotations
@@ -49,6 +50,8 @@ UP = np.array([0.0, 0.0, 1.0])
 #: meshes): what must stay above a surface (``surface_z``) while the hand works at a handle.
 HAND_BOXES = (((-0.034, -0.106, -0.131), (0.034, 0.106, -0.035)),
               ((-0.012, -0.068, -0.045), (0.012, 0.068, 0.011)))
+#: How far (m) beyond its boxes the hand counts as touching a point: the memory's voxel.
+HAND_MARGIN_M = 0.01
 #: How far the fingertips reach past the TCP along its axis: the Panda's finger collision mesh is
 #: 53.8 mm long from its joint, 58.4 mm down the hand; the TCP is 103.4 mm down the hand.
 FINGERTIP_M = 0.009
@@ -128,6 +131,27 @@ def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
         The (16, 3) corners of the hand's and open fingers' boxes (`HAND_BOXES`).
     """
     return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+
+
+def hand_touches(tcp_pose: np.ndarray, points: np.ndarray | None, margin_m: float = HAND_MARGIN_M) -> int:
+    """How many of ``points`` the hand and open fingers would touch at a pose, for preferring grasps
+    clear of what stands beside the thing grasped.
+
+    Args:
+        tcp_pose: the TCP's 4×4 pose (world frame).
+        points: (N, 3) points of what the hand is to keep off (world), or None.
+        margin_m: how far beyond the hand's boxes (`HAND_BOXES`) a point still counts.
+
+    Returns:
+        The points within ``margin_m`` of any of the boxes.
+    """
+    if points is None or not len(points):
+        return 0
+    local = (np.asarray(points, dtype=float) - tcp_pose[:3, 3]) @ tcp_pose[:3, :3]
+    inside = np.zeros(len(local), dtype=bool)
+    for lo, hi in HAND_BOXES:
+        inside |= np.all((local >= np.subtract(lo, margin_m)) & (local <= np.add(hi, margin_m)), axis=1)
+    return int(inside.sum())
 
 
 def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
