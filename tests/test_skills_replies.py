@@ -6,11 +6,14 @@ import numpy as np
 import pytest
 
 from skills.arm.skill_plan import Step
-from skills.replies import BLOCKED_RAD, step_problem
+from skills.replies import ARRIVED_M, BLOCKED_RAD, step_problem
 
 
-def _reply(final_error: float = 0.0, contacts: tuple = (), stopped: bool = False, held: dict | None = None) -> dict:
-    return {"q": np.zeros(8), "tcp_pose": np.eye(4), "held": held, "gripper_width": 0.0, "stowed": False,
+def _reply(final_error: float = 0.0, contacts: tuple = (), stopped: bool = False, held: dict | None = None,
+           at: tuple = (0.0, 0.0, 0.0)) -> dict:
+    tcp = np.eye(4)
+    tcp[:3, 3] = at
+    return {"q": np.zeros(8), "tcp_pose": tcp, "held": held, "gripper_width": 0.0, "stowed": False,
             "final_error": final_error, "stopped_on_contact": stopped, "contacts": list(contacts)}
 
 
@@ -35,3 +38,15 @@ def test_a_lowering_held_back_by_what_it_carries_has_arrived(touch, reply, probl
     found, achieved = step_problem(step, reply, _reply(held=CARRIED))
     assert achieved is None
     assert (found == "") if problem == "" else (problem in found)
+
+
+@pytest.mark.parametrize("short_m, arrived", [(0.01, True), (0.03, False)])
+def test_a_move_held_back_within_a_voxel_of_its_target_has_arrived(short_m: float, arrived: bool) -> None:
+    target = np.eye(4)
+    target[:3, 3] = (0.5, 0.0, 0.9)
+    step = Step("move", "approach the door handle", samples=np.zeros((3, 8)), dt=0.01, stop_on_contact=True,
+                tcp_target=target)
+    reply = _reply(final_error=2 * BLOCKED_RAD, at=(0.5 - short_m, 0.0, 0.9))
+    found, _ = step_problem(step, reply, _reply())
+    assert (found == "") == arrived and (arrived or "a touch too light" in found)
+    assert ARRIVED_M == pytest.approx(0.015)
