@@ -297,6 +297,25 @@ def test_drawers_seen_apart_are_not_merged_by_a_detection_spanning_both() -> Non
     assert update.absorbed == {} and len(memory.with_label("drawer")) == 2
 
 
+def test_a_fragment_of_a_piece_within_it_and_its_door_is_that_piece() -> None:
+    """The head camera saw a cabinet's top and its door; the wrist camera then saw a corner of its
+    plinth beside the door, sharing no surface with the top and outside its box. It became a second
+    cabinet, in the graph before a later view merged the two, and the explorer tried to open it (a
+    cabinet with no door). Lying within the box of the cabinet with its door, it is that cabinet."""
+    top = Box(5, "cabinet", (0.0, 0.02, 1.2), (0.4, 0.4, 1.22))
+    door = Box(6, "door", (0.0, 0.02, 0.76), (0.36, 0.04, 1.2))
+    memory = InstanceMemory()
+    _see(memory, [top, door], eye=(0.2, -0.7, 1.45), target=(0.2, 0.2, 1.0))
+    cabinet, door_i = _one(memory, "cabinet"), _one(memory, "door")
+    assert door_i.parent == cabinet.id  # the premise: the door is the cabinet's
+    plinth = Box(9, "cabinet", (0.365, 0.02, 0.76), (0.4, 0.1, 0.82))
+    lo, hi = cabinet.bounds
+    assert plinth.lo[2] < lo[2]  # outside the top's own box
+    update = _see(memory, [top, door, plinth], eye=(0.3, -0.5, 0.95), target=(0.38, 0.05, 0.8))
+    assert update.created == () and _one(memory, "cabinet") is cabinet
+    assert cabinet.bounds[0][2] < 0.83  # it holds the plinth's corner now
+
+
 def test_pieces_never_seen_together_are_merged_when_a_detection_bridges_them() -> None:
     """Frame 0 shows only the lower front, frame 1 only the upper one (nothing behind the lower:
     no return, no evidence, so it is kept): two instances, never seen together. A detection

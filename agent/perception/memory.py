@@ -24,7 +24,7 @@ from scipy.spatial import cKDTree
 
 from agent.mapping.camera import Intrinsics
 from agent.perception.frames import Detection, check_frame, check_labels, detect, frame_labels
-from agent.perception.instances import FrameUpdate, Instance, MemoryConfig
+from agent.perception.instances import FrameUpdate, Instance, MemoryConfig, family_bounds
 from agent.perception.overlap import overlap
 from agent.perception.part_parents import attach_parts, set_parent
 from agent.perception.staleness import DepthView, depth_view, stale_voxels
@@ -256,10 +256,11 @@ class InstanceMemory:
     def _matches(self, detection: Detection) -> list[int]:
         """Ids of live same-label instances the detection overlaps enough, best first."""
         scored = []
-        for inst in self.live():
-            if inst.label != detection.label or not len(inst.keys):
+        live = {inst.id: inst for inst in self.live() if len(inst.keys)}
+        for inst in live.values():
+            if inst.label != detection.label:
                 continue
-            score = overlap(detection, inst, self.config)
+            score = overlap(detection, inst, self.config, family_bounds(inst, live))
             if score > 0:
                 scored.append((-score, inst.id))
         return [i for _, i in sorted(scored)]
