@@ -100,12 +100,12 @@ class Picks:
         def in_view(places: np.ndarray) -> np.ndarray:
             return reachable(places) & (places[:, 1] - edge_y >= body.head_sees_from)
 
-        keep_out, radius = kept_clear(body.memory, body.eye, body.home[:2]), float(max(extent[:2])) / 2
+        obstacles, radius = [*others, *kept_clear(body.memory, body.eye, body.home[:2])], float(max(extent[:2])) / 2
         try:  # where the head camera sees it, so the memory follows it; else before the robot
-            spot = idle_spot(surface.points(), others, radius, near, keep_out=keep_out, allowed=in_view,
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=in_view,
                              allowed_means="within the arm's reach and the head camera's view")
         except SkillPlanError:
-            spot = idle_spot(surface.points(), others, radius, near, keep_out=keep_out, allowed=reachable,
+            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
                              allowed_means="within the arm's reach")
         (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))

@@ -31,22 +31,6 @@ def test_an_idle_spot_is_on_the_surface_clear_of_everything_standing_on_it() -> 
 
 
 
-def test_space_kept_free_keeps_the_object_out_but_not_the_hand() -> None:
-    # The lanes to two handles, 15 cm either side of x = -0.27 and x = 0.27, leave a 24 cm strip
-    # between them. Taken for things the hand must keep 14 cm off, they left no spot there (a
-    # 0.28 m free place was asked for); they are empty space, which only the object must keep out of.
-    table = _table()
-    ys = np.arange(-0.4, 0.4, 0.05)
-    lanes = [np.column_stack([np.full(ys.size, x), ys, np.full(ys.size, 0.95)]) for x in (-0.42, -0.12, 0.12, 0.42)]
-    within = {"allowed": lambda places: np.abs(places[:, 0]) <= 0.2, "allowed_means": "between the lanes"}
-    with pytest.raises(SkillPlanError, match="no free place 0.28 m across"):
-        idle_spot(table, lanes, 0.035, (0.0, 0.0), **within)  # as things: no room for the hand
-    spot = idle_spot(table, [], 0.035, (0.0, 0.0), keep_out=lanes, **within)
-    assert abs(spot[0]) <= 0.12 - 0.035 - 0.03 + 1e-9  # the object 3 cm clear of either lane
-    with pytest.raises(SkillPlanError, match="between the lanes"):
-        idle_spot(table, [], 0.1, (0.0, 0.0), keep_out=lanes, **within)  # a 20 cm object does not fit
-
-
 def test_a_spot_beyond_the_arm_s_reach_is_not_offered() -> None:
     table = _table()
     base = np.array([0.0, -0.9])  # the robot at the table's near edge (y = -0.4)

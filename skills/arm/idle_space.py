@@ -17,18 +17,15 @@ HAND_RADIUS_M = 0.11
 
 
 def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
-              near: Sequence[float], *, keep_out: Sequence[np.ndarray] = (), margin_m: float = 0.03,
-              grid_m: float = 0.02, hand_radius_m: float = HAND_RADIUS_M,
+              near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
+              hand_radius_m: float = HAND_RADIUS_M,
               allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed"
               ) -> np.ndarray:
     """A free place on a surface to put an object down: RoboEXP's idle space.
 
-    Points of things standing above the surface's top (by more than 5 mm) must stay ``margin_m``
-    beyond the object's ``radius`` or the hand's reach around its TCP (``hand_radius_m``), whichever
-    is more, away in the plane: the hand putting the object down must not touch them. Points of
-    space to keep free (``keep_out``: what a door sweeps, the lane to a handle) are no things the
-    hand could touch; only the object must stay out of them, by ``margin_m`` beyond its ``radius``.
-    The spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+    Points standing above the surface's top (by more than 5 mm) must stay ``margin_m`` beyond the
+    object's ``radius`` or the hand's reach around its TCP (``hand_radius_m``), whichever is more,
+    away in the plane; the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
 
     Args:
         surface_points: (N, 3) the surface's points (a table's, from the memory); its top is their
@@ -37,7 +34,6 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
             stands now is no idle spot).
         radius: the object's footprint radius (m).
         near: the place (x, y) the spot should be nearest to.
-        keep_out: point sets of space nothing may be put in, whatever their height.
         margin_m: room kept around the object or the hand.
         grid_m: the spacing of the candidate places.
         hand_radius_m: how far the hand reaches from the TCP across its axis.
@@ -73,10 +69,6 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     if standing and len(candidates):
         gap, _ = cKDTree(np.vstack(standing)).query(candidates)
         candidates = candidates[gap >= clear]
-    space = [np.asarray(o, dtype=float)[:, :2] for o in keep_out if len(o)]
-    if space and len(candidates):
-        gap, _ = cKDTree(np.vstack(space)).query(candidates)
-        candidates = candidates[gap >= keep]
     if allowed is not None and len(candidates):
         candidates = candidates[np.asarray(allowed(candidates), dtype=bool)]
     if not len(candidates):
