@@ -26,8 +26,15 @@ from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.idle_space import idle_spot, reach_along
 from skills.arm.skill_plan import SkillPlanError
-from skills.robot_body import RobotBody
+from skills.base import SkillResult as ArmResult
+from skills.robot_body import LOOK, STOW, RobotBody
 
+#: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
+#: the evaluation's tolerance for a thing put back.
+BACK_M = 0.02
+#: A thing reaching within this (m) of the strip the head camera does not see is looked down on
+#: with the wrist camera from `DOWN_VIEW_M` above before it is picked.
+HEAD_SEEN_M, DOWN_VIEW_M = 0.05, 0.4
 #: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
 #: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
 #: along the table's edge to a stand from which both lie within this.
@@ -80,6 +87,7 @@ class Picks:
         body = self.body
         if body.home is None:
             raise SkillPlanError("the robot has not looked yet")
+        self._look_down_at(obj.points())
         points = obj.points()
         top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
         surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
@@ -118,10 +126,31 @@ class Picks:
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
+        self._look_down_at(points)
         return SkillResult(True)
 
+    def _look_down_at(self, points: np.ndarray) -> None:
+        """The wrist camera straight down onto ``points`` when they reach into the strip before the
+        robot the head camera does not see (`RobotBody.head_sees_from`): before a thing there is
+        picked (a box found under a box lifted away was seen by its far half only, taken for one
+        narrow enough for the fingers to close around, and a finger came down on its top), and
+        where it stood once it is picked away (what it hid there no head frame shows)."""
+        body = self.body
+        assert body.home is not None
+        ahead = np.array([np.cos(body.home.yaw), np.sin(body.home.yaw)])
+        nearest = float(np.min((points[:, :2] - np.asarray(body.home[:2])) @ ahead))
+        if nearest > body.head_sees_from + HEAD_SEEN_M:
+            return
+        top = top_grasp_point(points)
+        surface_z = body.surface_z(top)
+        if body.run(LOOK, look_point=top, standoff_m=DOWN_VIEW_M, pitch_deg=90.0, surface_z=surface_z).ok:
+            body.look("wrist")
+        body.run(STOW, surface_z=surface_z)
+
     def pick_back(self, obj: Instance) -> SkillResult:
-        """Put ``obj``, picked away by this robot, back where it stood.
+        """Put ``obj``, picked away by this robot, back where it stood; when that fails after the arm
+        moved, once more from a fresh look at where the thing now is (`_find_again`), unless the
+        look finds it back already.
 
         Args:
             obj: the thing picked away.
@@ -138,16 +167,52 @@ class Picks:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert body.home is not None  # set by the look before the pick away
         self.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
+        result = self._put_back(obj, away)
+        if not result.ok and result.steps_done:
+            found = self._find_again(obj, away)
+            if found is not None and float(np.linalg.norm(found - away.grasp_point)) <= BACK_M:
+                return self._back(obj)  # it was let go of where it belongs
+            if found is not None:
+                result = self._put_back(obj, away)
+        return self._back(obj) if result.ok else SkillResult(False, result.reason)
+
+    def _put_back(self, obj: Instance, away: Away) -> ArmResult:
+        """One run of the pick-back skill from where the memory has ``obj`` now; the memory is told
+        where it went when it went there."""
+        body = self.body
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
                           label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
-        if not result.ok:
-            return SkillResult(False, result.reason)
-        body.memory.move(obj.id, _translation(away.grasp_point - now))
+        if result.ok:
+            body.memory.move(obj.id, _translation(away.grasp_point - now))
+        return result
+
+    def _find_again(self, obj: Instance, away: Away) -> np.ndarray | None:
+        """Where ``obj`` is after a pick back failed on the way: a head look from the stand; when the
+        memory no longer has it where it was, the thing of its label first seen in that look
+        nearest its place is it (the hand let go of it on the way), and the memory is told so.
+
+        Returns:
+            Its top grasp point now, or None when the look does not show it.
+        """
+        body = self.body
+        body.look("head")
+        memory = body.memory
+        if not obj.gone and len(obj.points()):
+            return top_grasp_point(obj.points())
+        new = [inst for inst in memory.with_label(obj.label) if inst.first_seen == memory.frame]
+        if not new:
+            return None
+        nearest = min(new, key=lambda inst: float(np.linalg.norm(inst.centroid - away.grasp_point)))
+        kept = memory.merge(obj.id, nearest.id)
+        return top_grasp_point(kept.points())
+
+    def _back(self, obj: Instance) -> SkillResult:
+        """``obj`` stands where it was picked from: forget it was away."""
         del self.away[obj.id]
-        body.remembered(self.vacated, obj)
+        self.body.remembered(self.vacated, obj)
         self.vacated.pop(obj.id, None)
         return SkillResult(True)
 
