@@ -87,7 +87,6 @@ class Picks:
         body = self.body
         if body.home is None:
             raise SkillPlanError("the robot has not looked yet")
-        self._look_down_at(obj.points())
         points = obj.points()
         top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
         surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
@@ -131,10 +130,9 @@ class Picks:
 
     def _look_down_at(self, points: np.ndarray) -> None:
         """The wrist camera straight down onto ``points`` when they reach into the strip before the
-        robot the head camera does not see (`RobotBody.head_sees_from`): before a thing there is
-        picked (a box found under a box lifted away was seen by its far half only, taken for one
-        narrow enough for the fingers to close around, and a finger came down on its top), and
-        where it stood once it is picked away (what it hid there no head frame shows)."""
+        robot the head camera does not see (`RobotBody.head_sees_from`): where a thing stood once
+        it is picked away, for what it hid there no head frame shows (a soap under two shells).
+        Not before the pick: a thing's top seen anew from above put it back off its place."""
         body = self.body
         assert body.home is not None
         ahead = np.array([np.cos(body.home.yaw), np.sin(body.home.yaw)])
