@@ -27,14 +27,11 @@ from agent.pose import Pose2D
 from skills.arm.idle_space import idle_spot, reach_along
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
-from skills.robot_body import LOOK, STOW, RobotBody
+from skills.robot_body import RobotBody
 
 #: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
 #: the evaluation's tolerance for a thing put back.
 BACK_M = 0.02
-#: A thing reaching within this (m) of the strip the head camera does not see is looked down on
-#: with the wrist camera from `DOWN_VIEW_M` above before it is picked.
-HEAD_SEEN_M, DOWN_VIEW_M = 0.05, 0.4
 #: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
 #: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
 #: along the table's edge to a stand from which both lie within this.
@@ -125,25 +122,7 @@ class Picks:
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
-        self._look_down_at(points)
         return SkillResult(True)
-
-    def _look_down_at(self, points: np.ndarray) -> None:
-        """The wrist camera straight down onto ``points`` when they reach into the strip before the
-        robot the head camera does not see (`RobotBody.head_sees_from`): where a thing stood once
-        it is picked away, for what it hid there no head frame shows (a soap under two shells).
-        Not before the pick: a thing's top seen anew from above put it back off its place."""
-        body = self.body
-        assert body.home is not None
-        ahead = np.array([np.cos(body.home.yaw), np.sin(body.home.yaw)])
-        nearest = float(np.min((points[:, :2] - np.asarray(body.home[:2])) @ ahead))
-        if nearest > body.head_sees_from + HEAD_SEEN_M:
-            return
-        top = top_grasp_point(points)
-        surface_z = body.surface_z(top)
-        if body.run(LOOK, look_point=top, standoff_m=DOWN_VIEW_M, pitch_deg=90.0, surface_z=surface_z).ok:
-            body.look("wrist")
-        body.run(STOW, surface_z=surface_z)
 
     def pick_back(self, obj: Instance) -> SkillResult:
         """Put ``obj``, picked away by this robot, back where it stood; when that fails after the arm
