@@ -125,12 +125,14 @@ class _Pick(ArmSkill):
         input_port("object_extent", np.ndarray, "the extent of its points (dx, dy, dz)"),
         input_port("place_point", np.ndarray, "where the grasp point is to be once the object stands at its "
                    "destination (x, y, z)"),
+        input_port("keep_off", np.ndarray, "points (N, 3) of what stands near, neither the object nor what it "
+                   "stands on, which the hand is to keep off", default=None),
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_pick(q, base_pose, inputs["object_point"], inputs["object_extent"], inputs["place_point"],
-                                 surface_z=inputs["surface_z"], skill=self.skill_name)
+                                 surface_z=inputs["surface_z"], skill=self.skill_name, keep_off=inputs["keep_off"])
 
     def summary(self, result: SkillResult) -> str:
         place = result.info.get("place_point")

@@ -15,12 +15,19 @@ from skills.arm.skill_plan import Step
 
 #: A move that ends further than this (rad or m, any joint) from its last sample was held back.
 BLOCKED_RAD = 0.03
+#: A move held back with its TCP this near (m) its target has arrived as near as the memory's
+#: voxels place anything: a finger brushing the handle it closes around, a carried thing grazing a
+#: neighbour at the end of the carry. What follows is re-timed from where the arm is.
+ARRIVED_M = 0.015
 #: The share of a planned opening or closing the part must make for the skill to count it done.
 MIN_PART_SHARE = 0.6
 #: What a grasp holds when it holds what the step expects, and what it says otherwise.
 _EXPECTED = {
     "handle": (lambda label: label.get("category") == "handle", "not a handle"),
     "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
+    # lowering what the hand carries: it arrives where that meets what it is put on, which the
+    # world reports as nothing the arm touched; the arm itself touching anything is no arrival
+    "support": (lambda label: False, "the arm itself, not what it carries"),
 }
 
 
@@ -85,8 +92,9 @@ def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | N
         return _gripper_problem(step, state), None
     contacts = state["contacts"]
     stopped = state["stopped_on_contact"] or state["final_error"] > BLOCKED_RAD
-    if step.touch and stopped and all(_EXPECTED[step.touch][0](c) for c in contacts):
-        return "", None  # a touch grasp's approach found what it reaches for (or a touch too light to report)
+    carrying = step.touch != "support" or held is not None
+    if step.touch and stopped and carrying and all(_EXPECTED[step.touch][0](c) for c in contacts):
+        return "", None  # a touch's approach found what it reaches for (or a touch too light to report)
     if state["stopped_on_contact"]:
         touched = ", ".join(f"{thing_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
         return f"stopped on contact with {touched}", None
@@ -102,12 +110,19 @@ def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | N
             return (f"the {kind} did not {verb}: its handle went {abs(achieved - motion.start):.3f} "
                     f"{motion.unit} of the {abs(want):.3f} {motion.unit} planned"), achieved
         return "", achieved
-    if state["final_error"] > BLOCKED_RAD:
+    if state["final_error"] > BLOCKED_RAD and _short_of(step, state) > ARRIVED_M:
         return (f"the arm stopped {state['final_error']:.3f} rad short of its target: something held it back "
                 f"(a touch too light for the world to report as a contact)"), None
     if previous is not None and previous["held"] is not None and held is None:
         return f"the gripper lost {thing_name(previous['held'])}", None
     return "", None
+
+
+def _short_of(step: Step, state: dict[str, Any]) -> float:
+    """How far (m) the TCP ended from where ``step`` was to take it; inf when the step names no target."""
+    if step.tcp_target is None:
+        return float("inf")
+    return float(np.linalg.norm(np.asarray(step.tcp_target)[:3, 3] - state["tcp_pose"][:3, 3]))
 
 
 def _gripper_problem(step: Step, state: dict[str, Any]) -> str:

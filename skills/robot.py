@@ -96,7 +96,7 @@ class Robot:
         config = self.config
         self.body = RobotBody(self.link, self.memory, self.skills, config.skill_timeout_s)
         self.parts = DoorsAndDrawers(self.body, self.routes, config.look_inside, config.stand, config.hold_open)
-        self.picks = Picks(self.body, config.idle_toward_robot_m, self.parts.may_fold)
+        self.picks = Picks(self.body, config.idle_toward_robot_m, self.parts.drive)
 
     @property
     def home(self) -> Pose2D | None:
@@ -224,7 +224,7 @@ class Robot:
             SkillPlanError: the base did not get there.
         """
         if self.body.home is not None:
-            self.body.drive(self.body.home, may_fold=self.parts.may_fold())
+            self.parts.drive(self.body.home)
 
     def stow(self) -> None:
         """Fold the arm into the base, as it must be for the base to drive on freely.

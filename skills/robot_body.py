@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
@@ -23,6 +23,8 @@ from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
 from agent.planning.route import Routes
 from agent.pose import Pose2D
+from skills.arm.drive_clear import clear_path
+from skills.arm.grasps import hand_corners
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
@@ -140,23 +142,27 @@ class RobotBody:
             self.context.planner = ArmPlanner.from_description(self.link.describe().wait().meta)
         return self.context.planner
 
-    def drive(self, pose: Pose2D, routes: Routes | None = None, *, may_fold: bool = True) -> None:
+    def drive(self, pose: Pose2D, routes: Routes | None = None, *, may_fold: bool = True,
+              standing_open: Sequence[np.ndarray] = ()) -> None:
         """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
         The arm is left where the last skill left it (backed off ahead of the base), which the
-        world checks on the way; when it touches something, it is folded in and the base drives
-        on from where it stopped, unless ``may_fold`` is false: a door this robot opened still
-        stands open, it swings out towards the robot, and the folding arm would sweep through it
-        (the drive fails then, as it would have). Folding it first every time would do the same.
+        world checks on the way; a straight drive whose hand would cross a part this robot left
+        standing open (``standing_open``) backs away from it first (`skills.arm.drive_clear`). When
+        the arm touches something, it is folded in and the base drives on from where it stopped,
+        unless ``may_fold`` is false: a door this robot opened still stands open, it swings out
+        towards the robot, and the folding arm would sweep through it (the drive fails then, as it
+        would have). Folding it first every time would do the same.
 
         Args:
             pose: where the base is to stand.
             routes: paths over the robot's map, or None to drive straight.
             may_fold: whether the arm may be folded in when it touches something on the way.
+            standing_open: point sets of the doors and drawers this robot opened that still stand open.
 
         Raises:
             SkillPlanError: the base did not get there.
         """
-        reply = self._move_base(pose, routes)
+        reply = self._move_base(pose, routes, standing_open)
         if not reply.get("reached") and may_fold:
             arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
@@ -167,13 +173,18 @@ class RobotBody:
             raise SkillPlanError(f"the base could not reach ({pose[0]:.2f}, {pose[1]:.2f}, "
                                  f"{math.degrees(pose[2]):.0f}°): it touched {touched}")
 
-    def _move_base(self, pose: Pose2D, routes: Routes | None) -> dict[str, Any]:
+    def _move_base(self, pose: Pose2D, routes: Routes | None,
+                   standing_open: Sequence[np.ndarray] = ()) -> dict[str, Any]:
         """One move_base command towards ``pose`` (see `drive`); the world's reply."""
         path = [[pose[0], pose[1]]]
         here = self.pose
         if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
                 and routes.reaches(np.array(pose[:2])):
             path = np.round(routes.to(np.array(pose[:2]))[1:], 3).tolist()
+        elif here is not None and any(len(points) for points in standing_open):
+            arm = arm_state(self.link.call("arm_state", {}).meta)
+            if not arm["stowed"]:
+                path = [list(xy) for xy in clear_path(here, pose, hand_corners(arm["tcp_pose"]), standing_open)]
         reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": pose[2]}).meta
         if isinstance(reply.get("base_pose"), list):
             self.pose = Pose2D.of(reply["base_pose"])

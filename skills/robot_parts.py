@@ -94,6 +94,35 @@ class DoorsAndDrawers:
         """
         return not any(opened.geometry.kind == "door" for opened in self.opened.values())
 
+    def standing_open(self) -> list[np.ndarray]:
+        """Where the doors and drawers this robot opened and has not shut again stand now: their
+        points in the memory, which each skill that moved them carried along.
+
+        Returns:
+            One (N, 3) point set per part (with its handle) standing open.
+        """
+        memory = self.body.memory
+        found = []
+        for part_id, opened in self.opened.items():
+            if opened.amount <= 0:
+                continue
+            part = memory.get(part_id)
+            children = [memory.get(c).points() for c in part.children]
+            found.append(np.vstack([part.points(), *children]))
+        return found
+
+    def drive(self, pose: Pose2D, routes: Routes | None = None) -> None:
+        """Drive the base to ``pose`` knowing what this robot left open (see `RobotBody.drive`).
+
+        Args:
+            pose: where the base is to stand.
+            routes: paths over the robot's map, or None to drive straight.
+
+        Raises:
+            SkillPlanError: the base did not get there.
+        """
+        self.body.drive(pose, routes, may_fold=self.may_fold(), standing_open=self.standing_open())
+
     def open_part(self, part: Instance, handle: int | None = None) -> SkillResult:
         """Stand before the door or drawer ``part``, open it by ``handle``, look inside; the frames
         taken while it stood open are in `views`. With ``hold_open`` the hand may still hold the
@@ -119,7 +148,7 @@ class DoorsAndDrawers:
         self.views, self.before = [], None
         geometry = handle_geometry(body.memory, handle, body.eye, kind=part.label)
         stand, amount = self._stand_for(geometry, self.routes)
-        body.drive(stand, self.routes, may_fold=self.may_fold())
+        self.drive(stand, self.routes)
         self.before = body.look("head")
         geometry = handle_geometry(body.memory, handle, body.eye, kind=part.label)
         closed_centre = part.centroid
@@ -133,7 +162,7 @@ class DoorsAndDrawers:
                 return SkillResult(False, f"{result.reason}; and then {error}")
             if math.dist(restand[:2], stand[:2]) > 0.02 or abs(restand[2] - stand[2]) > 0.02:
                 stand = restand
-                body.drive(stand, may_fold=self.may_fold())
+                self.drive(stand)
                 body.look("head")
                 geometry = handle_geometry(body.memory, handle, body.eye, kind=part.label)
                 result = self._open_from_here(part, geometry, amount, hold)
@@ -246,7 +275,7 @@ class DoorsAndDrawers:
             del self.opened[part.id]
             return SkillResult(True)
         if not opened.held:
-            body.drive(opened.stand, may_fold=self.may_fold())
+            self.drive(opened.stand)
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
                           held=opened.held)

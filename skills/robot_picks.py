@@ -26,8 +26,12 @@ from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.idle_space import idle_spot, reach_along
 from skills.arm.skill_plan import SkillPlanError
+from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody
 
+#: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
+#: the evaluation's tolerance for a thing put back.
+BACK_M = 0.02
 #: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
 #: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
 #: along the table's edge to a stand from which both lie within this.
@@ -52,14 +56,14 @@ class Picks:
     Args:
         body: the robot's body.
         idle_toward_robot_m: how far from the object, towards the robot, the idle spot is sought first.
-        may_fold: whether the arm may fold in when the base touches something on a drive (see
-            `RobotBody.drive`), asked at each drive.
+        drive: drives the base to a pose knowing what the robot left open
+            (`skills.robot_parts.DoorsAndDrawers.drive`).
     """
 
-    def __init__(self, body: RobotBody, idle_toward_robot_m: float, may_fold: Callable[[], bool]) -> None:
+    def __init__(self, body: RobotBody, idle_toward_robot_m: float, drive: Callable[[Pose2D], None]) -> None:
         self.body = body
         self.idle_toward_robot_m = idle_toward_robot_m
-        self.may_fold = may_fold
+        self.drive = drive
         self.away: dict[int, Away] = {}
         self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
 
@@ -109,10 +113,10 @@ class Picks:
                              allowed_means="within the arm's reach")
         (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
-        body.drive(Pose2D(stand_x, edge_y, body.home.yaw), may_fold=self.may_fold())
+        self.drive(Pose2D(stand_x, edge_y, body.home.yaw))
         place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=place,
-                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}")
+                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:
             return SkillResult(False, result.reason)
         body.memory.move(obj.id, _translation(place - top))
@@ -121,7 +125,9 @@ class Picks:
         return SkillResult(True)
 
     def pick_back(self, obj: Instance) -> SkillResult:
-        """Put ``obj``, picked away by this robot, back where it stood.
+        """Put ``obj``, picked away by this robot, back where it stood; when that fails after the arm
+        moved, once more from a fresh look at where the thing now is (`_find_again`), unless the
+        look finds it back already.
 
         Args:
             obj: the thing picked away.
@@ -137,19 +143,63 @@ class Picks:
         if away is None:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert body.home is not None  # set by the look before the pick away
-        body.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw), may_fold=self.may_fold())
+        self.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
+        result = self._put_back(obj, away)
+        if not result.ok and result.steps_done:
+            found = self._find_again(obj, away)
+            if found is not None and float(np.linalg.norm(found - away.grasp_point)) <= BACK_M:
+                return self._back(obj)  # it was let go of where it belongs
+            if found is not None:
+                result = self._put_back(obj, away)
+        return self._back(obj) if result.ok else SkillResult(False, result.reason)
+
+    def _put_back(self, obj: Instance, away: Away) -> ArmResult:
+        """One run of the pick-back skill from where the memory has ``obj`` now; the memory is told
+        where it went when it went there."""
+        body = self.body
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
-                          label=f"{obj.label} {obj.id}")
-        if not result.ok:
-            return SkillResult(False, result.reason)
-        body.memory.move(obj.id, _translation(away.grasp_point - now))
+                          label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
+        if result.ok:
+            body.memory.move(obj.id, _translation(away.grasp_point - now))
+        return result
+
+    def _find_again(self, obj: Instance, away: Away) -> np.ndarray | None:
+        """Where ``obj`` is after a pick back failed on the way: a head look from the stand; when the
+        memory no longer has it where it was, the thing of its label first seen in that look
+        nearest its place is it (the hand let go of it on the way), and the memory is told so.
+
+        Returns:
+            Its top grasp point now, or None when the look does not show it.
+        """
+        body = self.body
+        body.look("head")
+        memory = body.memory
+        if not obj.gone and len(obj.points()):
+            return top_grasp_point(obj.points())
+        new = [inst for inst in memory.with_label(obj.label) if inst.first_seen == memory.frame]
+        if not new:
+            return None
+        nearest = min(new, key=lambda inst: float(np.linalg.norm(inst.centroid - away.grasp_point)))
+        kept = memory.merge(obj.id, nearest.id)
+        return top_grasp_point(kept.points())
+
+    def _back(self, obj: Instance) -> SkillResult:
+        """``obj`` stands where it was picked from: forget it was away."""
         del self.away[obj.id]
-        body.remembered(self.vacated, obj)
+        self.body.remembered(self.vacated, obj)
         self.vacated.pop(obj.id, None)
         return SkillResult(True)
+
+    def _near(self, obj: Instance) -> np.ndarray:
+        """The points of everything remembered but ``obj`` and the tables and counters: what the hand
+        picking it and putting it down is to keep off (a bottle beside the one picked, the handle
+        beside the place it goes back to)."""
+        surfaces = {inst.id for inst in self.body.surfaces()}
+        points = [inst.points() for inst in self.body.memory.live() if inst.id != obj.id and inst.id not in surfaces]
+        return np.vstack(points) if points else np.zeros((0, 3))
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

@@ -58,6 +58,15 @@ def test_a_cup_below_the_head_camera_s_view_is_found_by_the_wrist_camera() -> No
     assert looks[:looks.index("stow")] == ["move_camera"] * 3  # across the table's width, then folded
 
 
+def test_a_corner_of_a_cabinet_seen_apart_is_no_second_cabinet() -> None:
+    # door-only 1003 (a tuning seed): the wrist camera's first looks saw a corner of the cabinet's
+    # plinth beside its door, apart from the top the head camera saw; it was a second cabinet in
+    # the graph, which the robot was asked to open (a cabinet with no door of its own), GED 4.
+    row = run_robot("door-only", 1003)
+    assert row["failed_actions"] == []
+    assert row["success"] and row["graph_edit_distance"] == 0.0 and row["state_recovered"]
+
+
 def test_memory_ids_are_put_in_the_ground_truth_s_terms_by_their_last_segmentation_id() -> None:
     memory = InstanceMemory()
     graph = ACSG()

@@ -297,6 +297,25 @@ def test_drawers_seen_apart_are_not_merged_by_a_detection_spanning_both() -> Non
     assert update.absorbed == {} and len(memory.with_label("drawer")) == 2
 
 
+def test_a_fragment_of_a_piece_within_it_and_its_door_is_that_piece() -> None:
+    """The head camera saw a cabinet's top and its door; the wrist camera then saw a corner of its
+    plinth beside the door, sharing no surface with the top and outside its box. It became a second
+    cabinet, in the graph before a later view merged the two, and the explorer tried to open it (a
+    cabinet with no door). Lying within the box of the cabinet with its door, it is that cabinet."""
+    top = Box(5, "cabinet", (0.0, 0.02, 1.2), (0.4, 0.4, 1.22))
+    door = Box(6, "door", (0.0, 0.02, 0.76), (0.36, 0.04, 1.2))
+    memory = InstanceMemory()
+    _see(memory, [top, door], eye=(0.2, -0.7, 1.45), target=(0.2, 0.2, 1.0))
+    cabinet, door_i = _one(memory, "cabinet"), _one(memory, "door")
+    assert door_i.parent == cabinet.id  # the premise: the door is the cabinet's
+    plinth = Box(9, "cabinet", (0.365, 0.02, 0.76), (0.4, 0.1, 0.82))
+    lo, hi = cabinet.bounds
+    assert plinth.lo[2] < lo[2]  # outside the top's own box
+    update = _see(memory, [top, door, plinth], eye=(0.3, -0.5, 0.95), target=(0.38, 0.05, 0.8))
+    assert update.created == () and _one(memory, "cabinet") is cabinet
+    assert cabinet.bounds[0][2] < 0.83  # it holds the plinth's corner now
+
+
 def test_pieces_never_seen_together_are_merged_when_a_detection_bridges_them() -> None:
     """Frame 0 shows only the lower front, frame 1 only the upper one (nothing behind the lower:
     no return, no evidence, so it is kept): two instances, never seen together. A detection
@@ -437,23 +456,22 @@ def test_a_drawer_far_from_its_chests_carcass_is_attached_to_the_piece_it_stands
     assert stray_i.parent is None and all(stray_i.id not in c.children for c in (chest, cabinet_i, wall_i))
 
 
-# --- suspected bugs, kept as strict expected failures (see the docstrings) ------------------------
-
-
-@pytest.mark.xfail(strict=True, reason="the spanning detection is absorbed whole into one of the two "
-                   "co-visible instances, which then takes every later view of the other")
 def test_after_a_spanning_detection_each_drawer_still_gets_its_own_views() -> None:
-    """Not merging the two drawers is not enough: `integrate_frame` still folds the spanning detection
-    into the best match (the lower drawer), whose voxels then cover the upper one too. Every later
-    detection of the upper drawer has containment 1 with both and goes to the lower id (ties break
-    by id), so the upper instance is never updated again: a ghost."""
+    """Not merging the two drawers is not enough: a detection spanning both, folded whole into the
+    best match (the lower drawer), made its voxels cover the upper one too; every later detection of
+    the upper drawer then had containment 1 with both and went to the lower id (ties break by id),
+    and the upper instance was never updated again: a ghost, and what the upper drawer held was read
+    as the lower's. The spanning detection is now cut between the drawers it spans."""
     memory = InstanceMemory()
     _see(memory, [LOWER, UPPER], FRONT_EYE, FRONT_TARGET)
     lower, upper = _holding(memory, "drawer", LOWER), _holding(memory, "drawer", UPPER)
-    _see(memory, _both_as_one(), FRONT_EYE, FRONT_TARGET)
+    spanning = _see(memory, _both_as_one(), FRONT_EYE, FRONT_TARGET)
+    assert set(spanning.updated) == {lower.id, upper.id} and spanning.absorbed == {}
     update = _see(memory, [UPPER], FRONT_EYE, FRONT_TARGET)
     assert upper.id in update.updated and upper.last_seen == memory.frame
+    assert lower.id not in update.updated
     assert lower.bounds[1][2] < 0.96  # the lower drawer's box stays on the lower front
+    assert upper.bounds[0][2] > 0.94 and lower.hint == LOWER.id and upper.hint == UPPER.id
 
 
 def test_a_cup_on_the_table_beside_an_open_door_is_not_inside_the_cabinet() -> None:

@@ -10,6 +10,7 @@ import pytest
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from skills.arm.grasps import (
+    EDGE_INSET_M,
     FINGERTIP_M,
     HANDLE_TOP_M,
     TOP_PITCHES,
@@ -99,5 +100,13 @@ def test_objects_that_fit_are_grasped_around_and_wider_ones_by_their_top() -> No
     long = object_grasps(np.array([0.05, 0.2, 0.1]), point, base, 0.075, 0.02)  # fits only across its width
     assert [tuple(np.round(g.rotation[:, 1], 6)) for g in long] == [(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0)]
     box = object_grasps(np.array([0.18, 0.18, 0.14]), point, base, 0.075, 0.02)
-    assert len(box) == 8 and all(g.name == "fingertips-on-top" and g.touch for g in box)  # every direction
-    assert all(g.depth == -FINGERTIP_M and g.rotation[:, 2] == pytest.approx([0, 0, -1]) for g in box)
+    middle, edge = box[:8], box[8:]
+    assert all(g.name == "fingertips-on-top" and g.touch for g in middle)  # every direction
+    assert all(g.depth == -FINGERTIP_M and g.rotation[:, 2] == pytest.approx([0, 0, -1]) for g in middle)
+    assert all(g.offset == pytest.approx(0.0) for g in middle)
+    # then on the top just inside its near edge, straight down and leaning back towards the robot
+    assert len(edge) == 4 and all(g.name == "fingertips-on-near-edge" and g.touch for g in edge)
+    assert all(g.offset == pytest.approx([-(0.09 - EDGE_INSET_M), 0.0, 0.0]) for g in edge)
+    assert [round(float(math.degrees(math.acos(-g.rotation[2, 2])))) for g in edge] == [0, 0, 30, 30]
+    assert all(g.rotation[0, 2] > 0 for g in edge[2:])  # the approach leans away: the wrist nearer the base
+    assert all(abs(g.rotation[:, 1] @ [1.0, 0.0, 0.0]) < 1e-9 for g in edge)  # closing across the line of sight

@@ -14,7 +14,8 @@ from agent.perception.part_motion import moved_geometry
 from skills.arm.arm_model import READY
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
-from skills.arm.grasps import FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance, hand_bottom
+from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
+                               hand_bottom, hand_touches)
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -214,6 +215,7 @@ def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner
     assert steps["close the fingers"].expect_held is None and steps["grasp the object"].expect_held == "object"
     down = steps["down onto the object's top"]
     assert down.touch == "object" and down.stop_on_contact
+    assert steps["lower"].touch == "support"  # it arrives where the box meets what it is put on
     grasp = plan.info["grasp_pose"]
     assert grasp[:3, 2] @ [0, 0, -1] > 0.999
     assert grasp[:3, 3] == pytest.approx(top + [0, 0, FINGERTIP_M], abs=1e-9)  # the fingertips on the top
@@ -222,6 +224,35 @@ def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner
     assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), grasp)  # lifted from the top, not from below
     release = _tcp(planner, steps["lower"].samples[-1])
     assert release[:3, 3] == pytest.approx(place + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
+
+
+def test_a_wide_box_whose_middle_is_out_of_reach_is_lifted_by_its_near_edge(planner: ArmPlanner) -> None:
+    # A 30 cm box 0.92 m out from the base's axis: no hand above its middle reaches (IK fell 15 cm
+    # short of one in a scene), but the top just inside its near edge is 0.8 m out.
+    top, place, size = np.array([0.3, 0.2, 0.87]), np.array([0.6, -0.2, 0.87]), (0.3, 0.3, 0.115)
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE)
+    assert plan.info["grasp"] == "fingertips-on-near-edge"
+    _check_runnable(plan, np.array(STOWED))
+    edge = np.array([0.0, -(0.15 - EDGE_INSET_M), 0.0])  # towards the robot, which faces +y
+    assert plan.info["grasp_pose"][:3, 3] == pytest.approx(top + edge + [0, 0, FINGERTIP_M], abs=1e-9)
+    steps = {step.name: step for step in plan.steps}
+    assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), plan.info["grasp_pose"])
+    release = _tcp(planner, steps["lower"].samples[-1])  # carried by its edge: the edge goes as far
+    assert release[:3, 3] == pytest.approx(place + edge + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
+
+
+def test_a_pick_keeps_the_hand_off_what_stands_beside_the_object(planner: ArmPlanner) -> None:
+    # A bottle 9 cm beside the one picked, across the line of sight: the hand closing across that
+    # line (the first choice), 21 cm across its fingers' travel, would come down on it.
+    top, place, size = np.array([0.3, -0.15, 0.9]), np.array([0.6, -0.2, 0.9]), (0.05, 0.05, 0.15)
+    first = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE)
+    closing = first.info["grasp_pose"][:3, 1]
+    xs, zs = np.meshgrid(np.linspace(-0.025, 0.025, 6), np.linspace(0.755, 0.9, 8))
+    neighbour = np.column_stack([xs.ravel(), np.zeros(xs.size), zs.ravel()]) + top * [1, 1, 0] + 0.09 * closing
+    clear = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE, keep_off=neighbour)
+    _check_runnable(clear, np.array(STOWED))
+    assert hand_touches(first.info["grasp_pose"], neighbour) > 0
+    assert hand_touches(clear.info["grasp_pose"], neighbour) == 0  # closing along the other way
 
 
 def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_place(planner: ArmPlanner) -> None:

@@ -1,13 +1,16 @@
 """Tabletop interactive-exploration suites after RoboEXP's Table I: drawing, building, writing.
 
-Five tasks (`TASKS`), ten variants each (seeds 0-9), varying object number, type and layout as the
-paper's do: storage with drawers only, with doors only, with both; nested containers
+Five tasks (`TASKS`), any number of variants each (one per seed), varying object number, type and
+layout as the paper's do: storage with drawers only, with doors only, with both; nested containers
 (Matryoshka-style: an open-bottom box over a smaller box or thing, in storage or on the table); and
 occlusion (an obstacle standing in a door's swing, to be picked away before the door can open).
 The table is centred on the world origin, long side along x; storage stands along its back edge
 (+y) with fronts facing -y, towards a robot in front of the table (y < 0). Every part starts closed.
 Things on the table stay out of every part's reach, except the obstacles the occlusion task puts
 there on purpose; the ground truth finds blockers from geometry either way.
+
+The seeds are split once (`worlds.tabletop_splits.SPLITS`): tuning seeds, traced and tuned on, and
+reported seeds, far from them, run only whole for the figure.
 """
 
 from __future__ import annotations
@@ -25,13 +28,17 @@ from worlds.camera import SegLabels
 from worlds.scene import add_boxes, add_shape, add_storage
 from worlds.storage import HANDLE_REACH, storage_model
 from worlds.storage_placement import StoragePlacement
+from worlds.tabletop_splits import SPLITS
 from worlds.tabletop_scene import SHELL_WALL, TABLE_HEIGHT, TABLE_ID, TabletopObject, TabletopScene, half_extents
 from worlds.things import Rect, rects_overlap
 from worlds.urdf import sweep_points
 from worlds.vocabulary import COLOURS, OBJECTS
 
 TASKS = ("drawer-only", "door-only", "drawer-door", "recursive", "occlusion")
-VARIANTS = 10
+
+
+#: Variants per task of the tuning split: the suites `write_tabletop_suites` writes.
+VARIANTS = SPLITS["tuning"].variants
 #: Small things that hide in storage, stand on the table or sit under a box (vocabulary words only).
 _ITEMS = tuple(c for c in ("apple", "cup", "can", "jar", "mug", "soap", "bowl", "book", "clock") if c in OBJECTS)
 #: Tall, narrow things that make good obstacles in front of a door (the paper's condiment bottle).
@@ -246,10 +253,12 @@ def tabletop_variant(task: str, seed: int) -> TabletopScene:
         The scene.
 
     Raises:
-        ValueError: an unknown task.
+        ValueError: an unknown task, or a negative seed.
     """
     if task not in TASKS:
         raise ValueError(f"task: {task!r} is not one of {TASKS}")
+    if seed < 0:
+        raise ValueError(f"seed: {seed} must be 0 or more")
     rng = np.random.default_rng([seed, TASKS.index(task)])
     for _ in range(_TRIES):
         scene = _Draw(rng, task, seed).scene()
@@ -294,7 +303,7 @@ def build_tabletop(client: int, scene: TabletopScene) -> SegLabels:
 
 
 def write_tabletop_suites(out_dir: Path | str) -> list[Path]:
-    """One JSON-lines file per task, ``<task>.jsonl``: per line ``{seed, task, scene, acsg}`` for seeds 0-9.
+    """One JSON-lines file per task, ``<task>.jsonl``: per line ``{seed, task, scene, acsg}`` for the tuning seeds.
 
     Each file is written to a temporary name and renamed, so a reader never sees half a suite.
 
@@ -309,7 +318,7 @@ def write_tabletop_suites(out_dir: Path | str) -> list[Path]:
     paths = []
     for task in TASKS:
         lines = []
-        for seed in range(VARIANTS):
+        for seed in SPLITS["tuning"].seeds():
             scene = tabletop_variant(task, seed)
             record = {"seed": seed, "task": task, "scene": scene.to_dict(), "acsg": scene.ground_truth_acsg()}
             lines.append(json.dumps(record))

@@ -26,7 +26,7 @@ import numpy as np
 
 from agent.acsg.interfaces import Detection
 from agent.perception.directions import GeometryError
-from agent.perception.instances import Instance
+from agent.perception.instances import Instance, family_bounds
 from agent.perception.memory import InstanceMemory
 from agent.perception.part_geometry import handle_geometry
 
@@ -54,7 +54,7 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
     """
     live = memory.live()
     by_id = {inst.id: inst for inst in live}
-    boxes = {inst.id: _family_bounds(inst, by_id) for inst in live}
+    boxes = {inst.id: family_bounds(inst, by_id) for inst in live}
     detections = []
     for inst in live:
         parent, relation = _relation(inst, live, by_id, boxes, vacated or {})
@@ -70,22 +70,6 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
 
 
 Box = tuple[np.ndarray, np.ndarray]
-
-
-def _family_bounds(inst: Instance, by_id: dict[int, Instance]) -> Box:
-    """The box around an instance and its live parts, recursively (a piece with its doors and drawers)."""
-    los, his = [], []
-    todo, seen = [inst.id], set()
-    while todo:
-        current = by_id.get(todo.pop())
-        if current is None or current.id in seen:
-            continue
-        seen.add(current.id)
-        lo, hi = current.bounds
-        los.append(lo)
-        his.append(hi)
-        todo.extend(current.children)
-    return np.min(los, axis=0), np.max(his, axis=0)
 
 
 def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], boxes: Mapping[int, Box],

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -121,6 +122,29 @@ class Instance:
         """Size (dx, dy, dz) of `bounds`."""
         lo, hi = self.bounds
         return hi - lo
+
+
+def family_bounds(inst: Instance, live: Mapping[int, Instance]) -> tuple[np.ndarray, np.ndarray]:
+    """The box around an instance and its live parts, recursively (a piece with its doors and drawers).
+
+    Args:
+        inst: the instance.
+        live: the live instances by id (parts not among them are left out).
+
+    Returns:
+        (lo, hi) corners.
+    """
+    los, his, todo, seen = [], [], [inst], set()
+    while todo:
+        current = todo.pop()
+        if current.id in seen:
+            continue
+        seen.add(current.id)
+        lo, hi = current.bounds
+        los.append(lo)
+        his.append(hi)
+        todo.extend(live[child] for child in current.children if child in live)
+    return np.min(los, axis=0), np.max(his, axis=0)
 
 
 @dataclass(frozen=True)

@@ -16,17 +16,19 @@ doors, drawers) are attached to a parent (`agent.perception.part_parents`).
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from agent.mapping.camera import Intrinsics
 from agent.perception.frames import Detection, check_frame, check_labels, detect, frame_labels
-from agent.perception.instances import FrameUpdate, Instance, MemoryConfig
+from agent.perception.instances import FrameUpdate, Instance, MemoryConfig, family_bounds
 from agent.perception.overlap import overlap
 from agent.perception.part_parents import attach_parts, set_parent
 from agent.perception.staleness import DepthView, depth_view, stale_voxels
-from agent.perception.voxels import pack, union, voxel_indices
+from agent.perception.voxels import centres, pack, union, voxel_indices
 
 
 class InstanceMemory:
@@ -139,13 +141,19 @@ class InstanceMemory:
                 created.append(self._create(detection).id)
                 continue
             target = self.instances[matches[0]]
+            apart = []
             for other in matches[1:]:
                 if self.instances[other].frames & (target.frames | {self.frame}):
-                    continue  # seen apart in one frame: two things, however close (stacked drawers)
+                    apart.append(other)  # seen apart in one frame: two things, however close (stacked drawers)
+                    continue
                 absorbed[other] = target.id
                 self._absorb_instance(target, self.instances[other])
-            self._absorb_detection(target, detection)
-            updated.append(target.id)
+            # Those seen apart before, and not in this frame (which shows them apart from this
+            # detection), share the detection: one that spans two drawers is both, not the first.
+            sharing = [target] + [self.instances[i] for i in apart if self.frame not in self.instances[i].frames]
+            for inst, share in _shares(detection, sharing):
+                self._absorb_detection(inst, share)
+                updated.append(inst.id)
         seen = set(created) | set(updated)
         attach_parts(self.instances, self.live(), seen, self._parents, self.config.part_gap_m)
         return FrameUpdate(self.frame, tuple(created), tuple(i for i in updated if i not in created),
@@ -248,10 +256,11 @@ class InstanceMemory:
     def _matches(self, detection: Detection) -> list[int]:
         """Ids of live same-label instances the detection overlaps enough, best first."""
         scored = []
-        for inst in self.live():
-            if inst.label != detection.label or not len(inst.keys):
+        live = {inst.id: inst for inst in self.live() if len(inst.keys)}
+        for inst in live.values():
+            if inst.label != detection.label:
                 continue
-            score = overlap(detection, inst, self.config)
+            score = overlap(detection, inst, self.config, family_bounds(inst, live))
             if score > 0:
                 scored.append((-score, inst.id))
         return [i for _, i in sorted(scored)]
@@ -265,7 +274,9 @@ class InstanceMemory:
 
     def _absorb_detection(self, inst: Instance, detection: Detection) -> None:
         inst.keys, inst.hits = union(inst.keys, inst.hits, detection.keys, detection.hits)
-        inst.last_seen, inst.hint = self.frame, detection.hint
+        inst.last_seen = self.frame
+        if detection.hint >= 0:
+            inst.hint = detection.hint
         inst.frames.add(self.frame)
         if detection.colour is not None:
             inst.colour = detection.colour
@@ -287,3 +298,34 @@ class InstanceMemory:
             set_parent(self.instances, target, other.parent)
         del self.instances[other.id]
         self.aliases[other.id] = target.id
+
+
+def _shares(detection: Detection, instances: list[Instance]) -> list[tuple[Instance, Detection]]:
+    """``detection`` cut among ``instances``: each voxel to the instance whose nearest voxel is nearest.
+
+    A detection that spans things the memory knows to be apart (two stacked drawers a detector took
+    for one) would otherwise go whole to the first, whose voxels then cover the other too, so every
+    later view of the other matches the first: a ghost never updated again. Cut, each keeps its own.
+    A share names no segment (hint -1): the detection's segment was all of them at once.
+
+    Args:
+        detection: the frame's detection.
+        instances: the instances it matched that are known to be apart, the best match first.
+
+    Returns:
+        (instance, its share) for each instance given at least one voxel; the detection whole
+        when there is only one instance.
+    """
+    if len(instances) == 1:
+        return [(instances[0], detection)]
+    points = centres(detection.keys, instances[0].voxel_m)
+    distances = np.stack([cKDTree(inst.points()).query(points)[0] for inst in instances])
+    nearest = np.argmin(distances, axis=0)  # ties go to the best match
+    shares = []
+    for k, inst in enumerate(instances):
+        mine = nearest == k
+        if mine.any():
+            hits = detection.hits[mine]
+            shares.append((inst, replace(detection, hint=-1, keys=detection.keys[mine], hits=hits,
+                                         pixels=int(hits.sum()))))
+    return shares

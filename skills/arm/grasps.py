@@ -16,7 +16,11 @@ object, closing across it) cannot:
   level grasp pulls it;
 - an object's top (`object_grasps`): an object wider than the opening (an open-bottom box, a jar,
   a bottle) is held by the closed fingertips on its top (a box's lid), the fingers closing along
-  the directions the usual grasp would, best first.
+  the directions the usual grasp would, best first; then, for a box whose middle is out of reach
+  (a wide box at the table's far side: the hand above its middle fell 15 cm short), on the top
+  just inside its near edge (`EDGE_INSET_M`), straight down and leaning back towards the robot
+  (`EDGE_PITCH`). The world carries what the fingers hold as it was held, so a box held by its
+  edge is lifted straight up like one held by its middle.
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
@@ -25,14 +29,15 @@ top was expected, and re-timed from where the arm stopped. Letting go of a bar s
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.
 
-Hand geometry for clearance checks: `hand_corners`, `hand_bottom` (what must stay above a table)
-and `front_clearance` (how far the hand stays in front of a part's front).
+Hand geometry for clearance checks: `hand_corners`, `hand_bottom` (what must stay above a table),
+`front_clearance` (how far the hand stays in front of a part's front) and `hand_touches` (what
+standing beside the thing grasped the hand would touch).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,6 +50,8 @@ UP = np.array([0.0, 0.0, 1.0])
 #: meshes): what must stay above a surface (``surface_z``) while the hand works at a handle.
 HAND_BOXES = (((-0.034, -0.106, -0.131), (0.034, 0.106, -0.035)),
               ((-0.012, -0.068, -0.045), (0.012, 0.068, 0.011)))
+#: How far (m) beyond its boxes the hand counts as touching a point: the memory's voxel.
+HAND_MARGIN_M = 0.01
 #: How far the fingertips reach past the TCP along its axis: the Panda's finger collision mesh is
 #: 53.8 mm long from its joint, 58.4 mm down the hand; the TCP is 103.4 mm down the hand.
 FINGERTIP_M = 0.009
@@ -63,6 +70,11 @@ LEVEL_SIN = 0.1
 #: the centre of a bar's voxels lies within a few millimetres of its axis when its face and top
 #: are both seen.
 HANDLE_DEPTH_M = 0.0
+#: How far inside a top's near edge (m) fingertips rest when its middle is out of reach.
+EDGE_INSET_M = 0.03
+#: How far (rad from straight down) the hand on a top's near edge leans back towards the robot:
+#: the wrist then stands nearer the base than the fingertips.
+EDGE_PITCH = math.radians(30.0)
 #: Level grasp variants tried in order: half turns about the gripper's axis, tilts about the
 #: handle's bar (negative: the gripper points down onto a level bar, the hand above it; `tilted`).
 FLIPS = (0.0, math.pi)
@@ -92,14 +104,17 @@ class ObjectGrasp:
     Args:
         rotation: the TCP's 3×3 rotation.
         depth: how far below the grasp point the TCP closes (negative: above it, the fingertips on the top).
-        name: as plans say it ("fingers-around", "fingertips-on-top").
+        name: as plans say it ("fingers-around", "fingertips-on-top", "fingertips-on-near-edge").
         touch: as for `HandleGrasp`.
+        offset: where on the top the grasp is, from its middle (world, horizontal); the thing is
+            carried by that point, so its release point shifts by as much.
     """
 
     rotation: np.ndarray
     depth: float
     name: str
     touch: bool = False
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
 _HAND_CORNERS = np.array([[x, y, z] for lo, hi in HAND_BOXES
@@ -116,6 +131,27 @@ def hand_corners(tcp_pose: np.ndarray) -> np.ndarray:
         The (16, 3) corners of the hand's and open fingers' boxes (`HAND_BOXES`).
     """
     return _HAND_CORNERS @ tcp_pose[:3, :3].T + tcp_pose[:3, 3]
+
+
+def hand_touches(tcp_pose: np.ndarray, points: np.ndarray | None, margin_m: float = HAND_MARGIN_M) -> int:
+    """How many of ``points`` the hand and open fingers would touch at a pose, for preferring grasps
+    clear of what stands beside the thing grasped.
+
+    Args:
+        tcp_pose: the TCP's 4×4 pose (world frame).
+        points: (N, 3) points of what the hand is to keep off (world), or None.
+        margin_m: how far beyond the hand's boxes (`HAND_BOXES`) a point still counts.
+
+    Returns:
+        The points within ``margin_m`` of any of the boxes.
+    """
+    if points is None or not len(points):
+        return 0
+    local = (np.asarray(points, dtype=float) - tcp_pose[:3, 3]) @ tcp_pose[:3, :3]
+    inside = np.zeros(len(local), dtype=bool)
+    for lo, hi in HAND_BOXES:
+        inside |= np.all((local >= np.subtract(lo, margin_m)) & (local <= np.add(hi, margin_m)), axis=1)
+    return int(inside.sum())
 
 
 def hand_bottom(tcp_pose: np.ndarray, base: np.ndarray | None = None, body_radius: float = 0.0) -> float:
@@ -323,10 +359,23 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
 
     Returns:
         The fingers around it along each of `closing_directions` it fits within ``opening``;
-        where it fits along none, the closed fingertips on its top along each.
+        where it fits along none, the closed fingertips on its top along each, then on its top
+        just inside the edge nearest the base (straight down, then leaning back by `EDGE_PITCH`),
+        the fingers closing across the line of sight, where that edge lies 1 cm or more from the middle.
     """
     directions = closing_directions(size, point, base_pose)
     around = [d for d in directions if across(size, d) <= opening]
     if around:
         return [ObjectGrasp(top_rotation(d), depth, "fingers-around") for d in around]
-    return [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
+    grasps = [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
+    sight = np.array([*(np.asarray(point[:2], dtype=float) - np.asarray(base_pose[:2], dtype=float)), 0.0])
+    if np.linalg.norm(sight) < 1e-6:
+        return grasps
+    sight /= np.linalg.norm(sight)
+    inset = across(size, sight) / 2 - EDGE_INSET_M
+    if inset < 0.01:
+        return grasps
+    closing = np.array([-sight[1], sight[0], 0.0])
+    return grasps + [ObjectGrasp(top_rotation(sign * closing, pitch, sight), -FINGERTIP_M, "fingertips-on-near-edge",
+                                 touch=True, offset=-inset * sight)
+                     for pitch in (0.0, EDGE_PITCH) for sign in (1.0, -1.0)]

@@ -1,11 +1,13 @@
 """Plans for picking an object away and back: top-down.
 
 Above the object, down onto its top (the fingers closing across the line of sight from the robot
-where the object fits that way, since perception places things worst along it; an object wider
+where the object fits that way, since perception places things worst along it, unless the hand
+would touch less of what stands near coming down another way; an object wider
 than the opening is held by the closed fingertips brought down onto its top until they touch,
 `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
-little above where it should (the world puts a released object down onto whatever is under it),
-open, back up, ready.
+little above where it should, or until it meets what it is put on first (a top a little higher
+than the memory had it holds the arm back without the arm touching anything: the world puts a
+released object down onto whatever is under it), open, back up, ready.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
 from skills.arm.frames import pose_at, shifted
 from skills.arm.grasp_lines import searched
-from skills.arm.grasps import UP, object_grasps
+from skills.arm.grasps import UP, hand_touches, object_grasps
 from skills.arm.ik_search import IKSearch
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
@@ -32,7 +34,7 @@ STRADDLE_CLEARANCE_M = 0.008
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
               extent: Sequence[float], place_point: Sequence[float], *, skill: str = "pick_away",
               surface_z: float | None = None, lift_m: float = 0.15, clearance_m: float = 0.015,
-              grasp_depth_m: float | None = None) -> SkillPlan:
+              grasp_depth_m: float | None = None, keep_off: np.ndarray | None = None) -> SkillPlan:
     """Pick an object and put it down elsewhere (see the module doc).
 
     Args:
@@ -47,6 +49,9 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         lift_m: how high above the grasp and the release the object is carried.
         clearance_m: how far above ``place_point`` the object is let go.
         grasp_depth_m: how far below its top the fingers close around it (default: from its height).
+        keep_off: (N, 3) points of what stands near, neither the object nor what it stands on:
+            the grasps whose hand would touch fewer of them, coming down onto the object and onto
+            the place, are tried first.
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
@@ -65,9 +70,13 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     ik = IKSearch(arm, here, base_pose)
     builder = PlanBuilder(arm, here, base_pose, surface_z)
     failures: list[str] = []
+    ways = []
     for way in object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth):
-        grasp = pose_at(way.rotation, top - way.depth * UP)
-        release = pose_at(way.rotation, place + (clearance_m - way.depth) * UP)
+        grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
+        release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
+        ways.append((way, grasp, release, _touched(grasp, release, lift_m, keep_off)))
+    ways.sort(key=lambda entry: entry[3])  # clear of the neighbours first; stable: else best first
+    for way, grasp, release, _ in ways:
         above_grasp, above_release = shifted(grasp, lift_m * UP), shifted(release, lift_m * UP)
         down = "down onto the object's top" if way.touch else "down onto the object"
         try:
@@ -87,7 +96,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         builder.grasp(way, down, descent, grasp, "object")
         builder.move("lift", chain[2], careful=True, tcp_target=above_grasp)
         builder.move("carry", chain[3], careful=False, tcp_target=above_release)
-        builder.move("lower", chain[4], careful=True, tcp_target=release)
+        builder.move("lower", chain[4], careful=True, tcp_target=release, touch="support")
         builder.gripper("open", "put the object down")
         builder.move("back up", chain[5], careful=True, tcp_target=above_release)
         builder.free_move("to ready", arm.ready, via_ready=False)
@@ -95,3 +104,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 "grasp_depth_m": way.depth, "grasp": way.name}
         return builder.finish(skill, info, ik)
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _touched(grasp: np.ndarray, release: np.ndarray, lift_m: float, keep_off: np.ndarray | None) -> int:
+    """How many of ``keep_off`` the hand would touch coming straight down onto the grasp and the
+    release (checked every 2 cm from ``lift_m`` above)."""
+    if keep_off is None or not len(keep_off):
+        return 0
+    return sum(hand_touches(shifted(pose, height * UP), keep_off)
+               for pose in (grasp, release) for height in np.arange(0.0, lift_m + 1e-9, 0.02))

@@ -135,7 +135,8 @@ class Step:
         expect_held: closing, what must then be held ("handle" or "object"; None: the fingers close
             on nothing, to touch with their tips).
         touch: "handle" or "object" when the move is a touch grasp's approach, which arrives when
-            it stops on touching that.
+            it stops on touching that; "support" when it lowers what the hand carries, which
+            arrives where that is held back by what it is put on (the arm touching nothing).
     """
 
     kind: str

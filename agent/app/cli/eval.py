@@ -11,7 +11,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from agent.app.cli.options import Commands, add_ray_option, add_suite_run_options, count_option, suite_settings
+from agent.app.cli.options import (Commands, add_ray_option, add_suite_run_options, count_option, seed_option,
+                                   suite_settings)
+from worlds.tabletop_splits import SPLITS
 
 RECORD_HELP = ("keep each episode's run folder with its Rerun recording under OUT/recordings "
                "(homebot replay opens one); without it evaluation episodes record nothing")
@@ -39,9 +41,16 @@ def add_command(commands: Commands) -> None:
 
     interactive = evaluations.add_parser("interactive", help="interactive exploration: RoboEXP's Table I")
     interactive.add_argument("--suite", choices=("tabletop",), default="tabletop",
-                             help="the five tabletop tasks, ten variants each (homebot suite tabletop)")
+                             help="the five tabletop tasks, any number of variants each (homebot suite tabletop)")
     interactive.add_argument("--tasks", default=None, help="comma separated (default: all five)")
-    interactive.add_argument("--variants", type=count_option, default=10, help="variants per task (default 10)")
+    interactive.add_argument("--split", choices=tuple(SPLITS), default=None,
+                             help="a fixed range of seeds: " + "; ".join(
+                                 f"{s.name}: seeds {s.seeds().start}-{s.seeds().stop - 1}, {s.use}"
+                                 for s in SPLITS.values()))
+    interactive.add_argument("--variants", type=count_option, default=None,
+                             help="variants per task (default: the split's, else 10); with a split, its first N")
+    interactive.add_argument("--seed-base", type=seed_option, default=None,
+                             help="the first variant's seed, without --split (default 0: the tuning seeds)")
     interactive.add_argument("--executor", choices=("symbolic", "robot"), default="symbolic",
                              help="symbolic: perfect perception and skills (the decision logic alone); "
                                   "robot: the arm in PyBullet, perceiving with its cameras")
@@ -139,22 +148,29 @@ def _eval_stop(args: argparse.Namespace) -> int:
 
 
 def _eval_interactive(args: argparse.Namespace) -> int:
-    from agent.app.eval.interactive import COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress
+    from agent.app.eval.failure_causes import format_cause_table
+    from agent.app.eval.interactive import (COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress,
+                                            split_seeds)
     from agent.app.runtime.ray_backend import RayError
     from worlds.tabletop import TASKS
 
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
     try:
-        report = evaluate_interactive(args.out, tasks, args.variants, args.executor, print_progress, args.workers,
-                                      _recordings(args), args.ray)
+        seed_base, variants = split_seeds(args.split, args.variants, args.seed_base, args.record)
+        report = evaluate_interactive(args.out, tasks, variants, args.executor, print_progress, args.workers,
+                                      _recordings(args), seed_base, args.ray)
     except (ValueError, RayError) as error:
         print(f"homebot eval interactive: {error}", file=sys.stderr)
         return 2
-    print(f"{report['n']} scenes, executor {args.executor}; mean ± s.e. over the variants")
+    first, last = report["seeds"]
+    print(f"{report['n']} scenes (seeds {first}-{last}{f', {args.split} split' if args.split else ''}), "
+          f"executor {args.executor}; mean ± s.e. over the variants")
     print(f"{'task':<12}" + "".join(f"{c.replace('_', ' '):>22}" for c in COLUMNS) + f"{'paper success':>15}")
     for task, row in report["table"].items():
         cells = "".join(f"{row[c][0]:>15.2f} ± {row[c][1]:<4.2f}" for c in COLUMNS)
         print(f"{task:<12}{cells}{PAPER_SUCCESS[task]:>15.0%}")
+    print("\nfailures by cause")
+    print(format_cause_table(report["causes"]))
     print(f"results {report['results']}")
     return 0
 

@@ -1,0 +1,52 @@
+"""Reading the world's replies to arm steps (`skills.replies.step_problem`), from plain replies."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skills.arm.skill_plan import Step
+from skills.replies import ARRIVED_M, BLOCKED_RAD, step_problem
+
+
+def _reply(final_error: float = 0.0, contacts: tuple = (), stopped: bool = False, held: dict | None = None,
+           at: tuple = (0.0, 0.0, 0.0)) -> dict:
+    tcp = np.eye(4)
+    tcp[:3, 3] = at
+    return {"q": np.zeros(8), "tcp_pose": tcp, "held": held, "gripper_width": 0.0, "stowed": False,
+            "final_error": final_error, "stopped_on_contact": stopped, "contacts": list(contacts)}
+
+
+CARRIED = {"category": "jar", "id": 9}
+
+
+@pytest.mark.parametrize("touch, reply, problem", [
+    # lowering what the hand carries arrives where it is held back by what it is put on
+    ("support", _reply(final_error=2 * BLOCKED_RAD, held=CARRIED), ""),
+    # ... but not where the arm itself touched something
+    ("support", _reply(final_error=2 * BLOCKED_RAD, stopped=True, held=CARRIED,
+                       contacts=({"category": "drawer", "id": 4, "link": 1, "robot_link": "panda_hand"},)),
+     "stopped on contact with drawer 4 (panda_hand)"),
+    # ... nor where what it carried was lost on the way
+    ("support", _reply(final_error=2 * BLOCKED_RAD), "short of its target"),
+    # any other move held back so is short of its target
+    (None, _reply(final_error=2 * BLOCKED_RAD, held=CARRIED), "a touch too light for the world to report"),
+    (None, _reply(final_error=BLOCKED_RAD / 2, held=CARRIED), ""),
+])
+def test_a_lowering_held_back_by_what_it_carries_has_arrived(touch, reply, problem) -> None:
+    step = Step("move", "lower", samples=np.zeros((3, 8)), dt=0.01, touch=touch)
+    found, achieved = step_problem(step, reply, _reply(held=CARRIED))
+    assert achieved is None
+    assert (found == "") if problem == "" else (problem in found)
+
+
+@pytest.mark.parametrize("short_m, arrived", [(0.01, True), (0.03, False)])
+def test_a_move_held_back_within_a_voxel_of_its_target_has_arrived(short_m: float, arrived: bool) -> None:
+    target = np.eye(4)
+    target[:3, 3] = (0.5, 0.0, 0.9)
+    step = Step("move", "approach the door handle", samples=np.zeros((3, 8)), dt=0.01, stop_on_contact=True,
+                tcp_target=target)
+    reply = _reply(final_error=2 * BLOCKED_RAD, at=(0.5 - short_m, 0.0, 0.9))
+    found, _ = step_problem(step, reply, _reply())
+    assert (found == "") == arrived and (arrived or "a touch too light" in found)
+    assert ARRIVED_M == pytest.approx(0.015)
