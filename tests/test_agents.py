@@ -16,6 +16,7 @@ import pytest
 
 from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.agents import AgentInfo, find_agents, open_agent_session
+from agent.app.bench.faults import foreground_sigint
 
 pytestmark = pytest.mark.slow
 
@@ -65,6 +66,7 @@ def _start_run(out: Path, listen: str, seed: int, budget: int, tick_period_s: fl
          "--set", f"episode.budget={budget}", "--set", f"episode.tick_period_s={tick_period_s}",
          "--stop", "budget", "--out", str(out)],
         stdout=open(out / "stdout.txt", "w"), stderr=open(out / "stderr.txt", "w"), stdin=subprocess.DEVNULL,
+        preexec_fn=foreground_sigint,
     )
 
 

@@ -17,6 +17,8 @@ import numpy as np
 import psutil
 import pytest
 
+from agent.app.bench.faults import foreground_sigint
+
 pytestmark = pytest.mark.slow
 
 
@@ -28,7 +30,7 @@ def _start(args: list[str], cwd: Path) -> subprocess.Popen:
     """A `homebot` command of this checkout in a process group of its own, as a shell starts a foreground job."""
     path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
     return subprocess.Popen([sys.executable, "-m", "agent.app.cli", *args], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, preexec_fn=foreground_sigint,
                             env={**os.environ, "PYTHONPATH": path})
 
 

@@ -158,10 +158,18 @@ def _other_namespace(config: Config, folder: Path) -> Sample:
         world.stop()
 
 
+def foreground_sigint() -> None:
+    """Popen's ``preexec_fn`` for a command that will get Ctrl-C: SIGINT back to its default, as a
+    shell gives a foreground job. A process started in the background by a shell without job
+    control (``nohup … &``) ignores SIGINT, and an ignored signal stays ignored across exec: its
+    Ctrl-C would do nothing."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _ctrl_c_run(config: Config, folder: Path) -> Sample:
     run = subprocess.Popen([sys.executable, "-m", "agent.app.cli", "run", "--seed", "0", "--out", str(folder),
                             "--listen", free_tcp_endpoint()], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                           text=True, start_new_session=True)
+                           text=True, start_new_session=True, preexec_fn=foreground_sigint)
     try:
         while not (logs := list(folder.glob("*/snapshots.jsonl"))) or len(logs[0].read_text().splitlines()) < 3:
             if run.poll() is not None:
