@@ -4,6 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 PIP := $(BIN)/pip install --constraint constraints.txt
 STAMP := $(VENV)/.installed
+# Test processes side by side (pytest-xdist): most tests wait on worlds, agents and sockets rather
+# than compute, so two share two cores well. TEST_WORKERS=0 runs them in this one process.
+TEST_WORKERS ?= 2
 LIBUSB := /usr/lib/x86_64-linux-gnu/libusb-1.0.so.0 /usr/lib/aarch64-linux-gnu/libusb-1.0.so.0
 
 .PHONY: run test test-quick system-deps browser-deps clean
@@ -12,10 +15,10 @@ run: $(STAMP)
 	$(BIN)/homebot run --seed 0
 
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS)
 
 test-quick: $(STAMP)
-	$(BIN)/python -m pytest -m "not slow"
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) -m "not slow"
 
 $(STAMP): pyproject.toml constraints.txt | system-deps browser-deps
 	$(PYTHON) -m venv $(VENV)

@@ -6,6 +6,11 @@ parent process loads only the third-party libraries, then forks one child per mo
 starts with no homebot module loaded and imports just its own. The pure libraries are checked the
 same way for what they load with them: no py_trees, no Zenoh, no PyBullet, whatever they import
 in turn.
+
+The parent does not guess which third-party modules those are: a first child imports every homebot
+module and names what else came with it, and the parent loads all of that (the frameworks aside,
+when they are what is checked for) before the per-module children fork. Each child then spends
+its time on homebot's own imports, not on scipy's or Rerun's.
 """
 
 from __future__ import annotations
@@ -17,7 +22,8 @@ from pathlib import Path
 
 from test_layers import PACKAGES, PURE, ROOT, _within
 
-#: Third-party libraries the parent loads once, so each child imports only homebot's own code.
+#: Third-party libraries the parent loads once, so each child imports only homebot's own code; the
+#: rest of what homebot's modules bring with them is found by the first child (see the docstring).
 THIRD_PARTY = ("numpy", "scipy", "torch", "open3d", "pinocchio", "ruckig", "matplotlib", "matplotlib.pyplot",
                "skimage", "networkx", "PIL", "py_trees", "zenoh", "pybullet")
 #: What importing a pure library must not load.
@@ -26,18 +32,15 @@ FRAMEWORKS = ("py_trees", "zenoh", "pybullet")
 _CHILDREN = r'''
 import importlib, json, os, sys
 modules, preload, banned = json.loads(sys.argv[1]), json.loads(sys.argv[2]), json.loads(sys.argv[3])
-for name in preload:
-    importlib.import_module(name)
-found = {}
-for module in modules:
+OWN = ("agent", "behaviours", "skills", "worlds")
+
+def in_child(work):
     read, write = os.pipe()
     pid = os.fork()
     if pid == 0:
         os.close(read)
         try:
-            importlib.import_module(module)
-            loaded = sorted(name for name in banned if name in sys.modules)
-            message = f"loads {', '.join(loaded)}" if loaded else ""
+            message = work()
         except BaseException as error:
             message = f"{type(error).__name__}: {error}"
         os.write(write, message.encode())
@@ -48,8 +51,37 @@ for module in modules:
         chunks.append(chunk)
     os.close(read)
     os.waitpid(pid, 0)
-    if chunks:
-        found[module] = b"".join(chunks).decode()
+    return b"".join(chunks).decode()
+
+def brought_along():
+    before = set(sys.modules)
+    for module in modules:
+        try:
+            importlib.import_module(module)
+        except BaseException:
+            pass  # reported by its own child below
+    return json.dumps([name for name in sys.modules if name not in before and name.split(".")[0] not in OWN
+                       and name.split(".")[0] not in banned])
+
+for name in preload:
+    importlib.import_module(name)
+for name in json.loads(in_child(brought_along) or "[]"):
+    try:
+        importlib.import_module(name)
+    except BaseException:
+        pass  # a module that only loads as part of its package's own import
+
+def import_alone(module):
+    def work():
+        importlib.import_module(module)
+        loaded = sorted(name for name in banned if name in sys.modules)
+        return f"loads {', '.join(loaded)}" if loaded else ""
+    return work
+
+found = {}
+for module in modules:
+    if message := in_child(import_alone(module)):
+        found[module] = message
 print(json.dumps(found))
 '''
 
