@@ -24,8 +24,10 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
      the way, else "the drawer did not open"; a part held back by its joint's end (a drawer pulled
      past its travel) is fine as long as it got that far, and the opening reached is reported;
    - before the gripper lets go after a motion that ended off its target, the arm is told to hold
-     where it really is (else it would spring to the target once free), and any move whose
-     samples no longer start where the arm is gets re-timed from there.
+     where it really is (else it would spring to the target once free), and after one that moved
+     a door or drawer, to hold still for `SETTLE_S` (a drawer pulled against the end of its travel
+     rebounds, and let go mid-rebound ran 10 cm back in; one pushed shut sprang 1 cm out); any
+     move whose samples no longer start where the arm is gets re-timed from there.
 
 A failure while the hand holds something, or with its fingers closed, first opens the gripper
 (RUNNING until it has), so the base is not left tied to furniture and the next grasp starts with
@@ -57,6 +59,8 @@ log = logging.getLogger(__name__)
 
 #: A motion that ends further than this from its last sample is held where it is before letting go.
 HOLD_RAD = 0.01
+#: How long (s) the arm holds still after moving a door or drawer, before letting go of its handle.
+SETTLE_S = 0.3
 #: Re-time a move whose first sample is further than this from where the arm is.
 RETIME_RAD = 0.005
 #: Seconds allowed for a command beyond its motion's duration (the world runs faster than real time).
@@ -235,9 +239,11 @@ class ArmSkill(PortedSkill):
             return self._succeed()
         step = self._steps[self._index]
         if step.kind == "gripper":
-            if step.action == "open" and self._last["final_error"] > HOLD_RAD and not self._holding_after_error:
+            moved_part = self._index > 0 and self._steps[self._index - 1].part_motion is not None
+            off_target = self._last["final_error"] > HOLD_RAD
+            if step.action == "open" and (off_target or moved_part) and not self._holding_after_error:
                 self._holding_after_error = True  # hold where the arm is before letting go
-                hold = planner.hold(self._last["q"])
+                hold = planner.hold(self._last["q"], SETTLE_S if moved_part else 0.0)
                 return self._send(lambda: self._send_move(hold))
             self._holding_after_error = False
             return self._send(lambda: self._ask("gripper", {"action": step.action}))
@@ -297,7 +303,7 @@ class ArmSkill(PortedSkill):
         if self._phase == "release":
             return "letting go after a failure"
         if self._holding_after_error:
-            return "holding the arm where it stopped"
+            return "holding the arm still before letting go"
         if self._index < len(self._steps):
             step = self._steps[self._index]
             return f"step {self._index + 1}/{len(self._steps)} {step.name}"

@@ -24,6 +24,7 @@ import pytest
 from agent.app.cli import main
 from agent.app.config import Config, load_config
 from agent.app.eval.calibrate import full_budget_jobs
+from agent.app.eval.interactive import evaluate_interactive
 from agent.app.eval.lfe_data import generate_dataset
 from agent.app.eval.runner import Job, WorldAddress, comparable, read_results, run_jobs
 from agent.app.runtime.ray_backend import LOCAL, NEEDS_RAY
@@ -156,6 +157,22 @@ def test_homes_explored_as_ray_tasks_give_the_same_shards(ray_cluster: None, tmp
         here, there = load_shard(shard_path(tmp_path / "here", seed)), load_shard(shard_path(tmp_path / "ray", seed))
         for name in here:
             np.testing.assert_array_equal(here[name], there[name])
+
+
+#: What a robot scene's row holds that is the machine's speed, not the exploration's.
+SCENE_TIMING = ("seconds", "skill_seconds", "planning_ms", "skill_times")
+
+
+@pytest.mark.slow
+def test_a_robot_scene_explored_as_a_ray_task_gives_the_row_a_worker_process_gives(ray_cluster: None,
+                                                                                     tmp_path: Path) -> None:
+    here = evaluate_interactive(tmp_path / "pool", ["door-only"], 1, "robot")
+    there = evaluate_interactive(tmp_path / "ray", ["door-only"], 1, "robot", ray=LOCAL)
+    assert there["n"] == 1 and there["table"] == here["table"]
+    rows = [{key: value for key, value in read_results(Path(report["results"]))[0].items() if key not in SCENE_TIMING}
+            for report in (here, there)]
+    assert rows[0]["success"] and rows[0]["actions"] > 0, rows[0]
+    assert rows[1] == rows[0]
 
 
 @pytest.mark.slow

@@ -146,6 +146,29 @@ def test_a_drawer_is_opened_looked_into_and_closed(link: WorldLink) -> None:
     assert np.linalg.norm(shift) < 0.02
 
 
+def test_a_drawer_pulled_against_the_end_of_its_travel_stays_open_when_let_go_and_shut_when_closed(
+        link: WorldLink) -> None:
+    """Pulled 0.2 m, a drawer that travels 0.181 m rebounds off its end; let go mid-rebound it ran
+    10 cm back in, and one pushed shut sprang 14 mm out again (past the 9 mm that counts as shut)."""
+    scene = tabletop_variant("drawer-only", 3)
+    placement = next(pl for _, pl in scene.storage if pl.furniture_id == 2)
+    travel = placement.model.part("drawer_1").upper
+    assert travel < 0.2
+    handle_id = placement.part_ids()["drawer_1_handle"]
+    memory, geometry, surface_z, observation = _perceive_part(link, scene, placement, "drawer_1")
+    closed = _pixels(observation, handle_id).mean(axis=0)
+
+    opened = _run(OpenDrawer, link, geometry=geometry, amount=0.2, surface_z=surface_z)
+    assert opened.ok, opened.reason
+    out = (closed - _pixels(_observe(link, memory), handle_id).mean(axis=0))[1]
+    assert out == pytest.approx(travel, abs=0.01)
+
+    shut = _run(CloseDrawer, link, geometry=geometry, amount=out, surface_z=surface_z)
+    assert shut.ok, shut.reason
+    left = (closed - _pixels(_observe(link), handle_id).mean(axis=0))[1]
+    assert abs(left) < 0.005
+
+
 def test_a_door_is_swung_open_past_60_degrees_and_shut_again(link: WorldLink) -> None:
     scene = tabletop_variant("door-only", 0)
     placement = next(pl for _, pl in scene.storage if pl.model.part("door_0").hinge == "left")

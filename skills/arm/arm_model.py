@@ -210,17 +210,20 @@ class ArmModel:
         waypoints = self.kin.clip(waypoints)
         return replace(step, samples=self.samples(waypoints, step.speed), dt=self.dt, waypoints=waypoints)
 
-    def hold(self, q: np.ndarray) -> Step:
-        """A one-sample move that holds the arm where it is (after a motion that fell short).
+    def hold(self, q: np.ndarray, duration_s: float = 0.0) -> Step:
+        """A move that holds the arm where it is (after a motion that fell short, or to let what
+        it moved come to rest).
 
         Args:
             q: where the arm is.
+            duration_s: how long to hold it there; at least one sample.
 
         Returns:
             The move, at the careful speed.
         """
         q = self.kin.clip(np.asarray(q, dtype=float))
-        return Step("move", "hold", q[None, :], self.dt, q[None, :], self.careful_speed)
+        count = max(1, math.ceil(duration_s / self.dt - 1e-9))
+        return Step("move", "hold", np.repeat(q[None, :], count, axis=0), self.dt, q[None, :], self.careful_speed)
 
 
 def _field(entry: Any, name: str) -> Any:
