@@ -10,7 +10,7 @@ import pytest
 
 from agent.acsg.decision import PROPOSER_USER, VERIFIER_USER, PromptDecisionModule, RuleDecisionModule
 from agent.acsg.interactive_exploration import InteractiveExploreConfig, explore
-from agent.acsg.interfaces import DecisionContext, SkillCall, SkillResult
+from agent.acsg.interfaces import DecisionContext, Detection, SkillCall, SkillResult
 from agent.acsg.json_format import from_ground_truth
 from agent.acsg.metrics import aligned_edit_distance, episode_metrics, position_recovery
 from agent.acsg.nodes import ActionNode, ObjectNode
@@ -159,6 +159,36 @@ def test_the_symbolic_scene_refuses_the_wrong_order() -> None:
     assert not closing.ok and "blocked" in closing.reason
     assert not call("pick_away", "3").ok  # a door is not picked
     assert not call("open_drawer", "3").ok  # nor opened as a drawer
+
+
+@dataclass
+class TwoViewsOfOneMug:
+    """A table with a mug on it, and a drawer chest whose drawer holds an apple. The first look
+    sees the mug twice (from the wrist above, from the head beside), as two instances; once the
+    drawer is opened, the perception has found the second to be the first (``absorbed``)."""
+
+    looks: int = 0
+
+    def observe(self) -> list[Detection]:
+        self.looks += 1
+        found = [Detection("1", "table"), Detection("2", "drawer chest", "1", "on"),
+                 Detection("3", "drawer", "2", "belongs"), Detection("4", "handle", "3", "belongs")]
+        if self.looks == 1:
+            return [*found, Detection("5", "mug", "1", "on"), Detection("6", "mug", "1", "on")]
+        return [*found, Detection("5", "mug", "1", "on", hints={"absorbed": ("6",)}),
+                Detection("7", "apple", "2", "inside")]
+
+    def execute(self, call: SkillCall) -> SkillResult:
+        return SkillResult(True)
+
+
+def test_a_thing_the_perception_finds_it_saw_twice_is_one_node() -> None:
+    perception = TwoViewsOfOneMug()
+    result = explore(perception, RuleDecisionModule(), perception)
+    mugs = [node.id for node in result.graph.objects() if node.label == "mug"]
+    assert mugs == ["o5"]
+    assert result.graph.edge("o1", "o5").relation == "on"
+    assert result.graph.successors("open:3", "action-object") == ["o7"]
 
 
 def test_rewards_follow_the_paper() -> None:

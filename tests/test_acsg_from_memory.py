@@ -80,3 +80,17 @@ def test_a_thing_seen_only_from_above_stands_on_the_surface_under_it() -> None:
         memory.instances[key] = Instance(key, label, None, keys, hits, memory.config.voxel_m, 0, 0)
     table, can = sorted(memory_detections(memory, np.array([0.0, -0.8, 1.5])), key=lambda d: d.label != "table")
     assert (can.parent, can.relation) == (table.instance, "on")
+
+
+def test_a_thing_the_memory_merged_names_the_ids_it_absorbed() -> None:
+    # One mug seen from above and from beside, first taken for two, then found to be one.
+    memory = InstanceMemory()
+    top = np.column_stack([np.linspace(0.0, 0.05, 20), np.zeros(20), np.full(20, 0.86)])
+    side = np.column_stack([np.zeros(20), np.full(20, -0.03), np.linspace(0.76, 0.85, 20)])
+    for key, points in enumerate((top, side)):
+        keys, hits = keys_of(points, memory.config.voxel_m)
+        memory.instances[key] = Instance(key, "mug", None, keys, hits, memory.config.voxel_m, 0, 0)
+    assert [d.hints.get("absorbed") for d in memory_detections(memory, np.array([0.0, -0.8, 1.5]))] == [None, None]
+    memory.merge(0, 1)
+    (mug,) = memory_detections(memory, np.array([0.0, -0.8, 1.5]))
+    assert mug.instance == "0" and mug.hints["absorbed"] == ("1",)

@@ -120,6 +120,23 @@ def test_cycles_are_refused_with_the_cycle_named() -> None:
     assert g.edge("open:3", "pick:5") is None  # nothing was added
 
 
+def test_an_object_merged_into_another_hands_it_its_edges_and_leaves() -> None:
+    g = obstruction_graph()
+    g.add_object("o7", "apple", instance="7")  # a second view of the apple, first taken for another
+    g.add_edge("o2", "o7", relation="inside")
+    g.add_edge("open:3", "o7")
+    g.add_object("o8", "apple")
+    g.add_edge("o7", "o8", relation="on")  # an edge only the copy had
+    g.merge_objects("o6", "o7")
+    assert "o7" not in g
+    assert g.edge("o2", "o6").relation == "inside" and g.edge("open:3", "o6") is not None
+    assert g.edge("o6", "o8").relation == "on"
+    assert not any("o7" in (e.source, e.target) for e in g.edges())
+    with pytest.raises(ACSGError, match="pick:5 act on o5"):
+        g.merge_objects("o6", "o5")  # the bottle has a pick of its own
+    assert "o5" in g
+
+
 def test_bad_edges_and_nodes_name_the_field() -> None:
     g = obstruction_graph()
     with pytest.raises(ACSGError, match="relation 'reveals' is not one of"):

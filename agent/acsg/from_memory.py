@@ -21,6 +21,7 @@ object standing in that box is found to block it. All of it is read from the rem
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -55,10 +56,13 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
     live = memory.live()
     by_id = {inst.id: inst for inst in live}
     boxes = {inst.id: family_bounds(inst, by_id) for inst in live}
+    absorbed: dict[int, list[str]] = {}
+    for alias in memory.aliases:
+        absorbed.setdefault(memory.get(alias).id, []).append(str(alias))
     detections = []
     for inst in live:
         parent, relation = _relation(inst, live, by_id, boxes, vacated or {})
-        hints = {}
+        hints: dict[str, Any] = {"absorbed": tuple(absorbed[inst.id])} if inst.id in absorbed else {}
         if inst.label in PARTS:
             swept = _swept_box(memory, inst, by_id, np.asarray(toward, dtype=float), drawer_pull_m)
             if swept is not None:

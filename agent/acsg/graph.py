@@ -114,6 +114,38 @@ class ACSG:
         self.add_edge(target, id)
         return node
 
+    def merge_objects(self, keep: str, other: str) -> None:
+        """Declare the object ``other`` the same thing as ``keep``: its edges go over to ``keep``
+        (those ``keep`` has already, or that would close a cycle, are dropped) and it leaves the graph.
+
+        Args:
+            keep: the object that stays.
+            other: the object folded into it.
+
+        Raises:
+            ACSGError: either is no object node, or an action acts on ``other`` (the action
+                names its target, and moving it is the caller's decision).
+        """
+        self.object(keep)
+        self.object(other)
+        if keep == other:
+            return
+        acted = [t for t, e in self._out[other].items() if e.kind == "object-action"]
+        if acted:
+            raise ACSGError(f"merge {other} into {keep}: {', '.join(acted)} act on {other}")
+        moved = [(s, keep, e) for s, e in self._in[other].items()] + [(keep, t, e) for t, e in self._out[other].items()]
+        for source, target in [(s, other) for s in self._in[other]] + [(other, t) for t in self._out[other]]:
+            self._out[source].pop(target, None)
+            self._in[target].pop(source, None)
+        del self._nodes[other], self._out[other], self._in[other]
+        for source, target, edge in moved:
+            if source == target or self.edge(source, target) is not None or self.edge(target, source) is not None:
+                continue
+            try:
+                self.add_edge(source, target, edge.kind, edge.relation)
+            except ACSGError:  # a cycle, or a clash with an edge keep has: keep's own account stands
+                continue
+
     def node(self, node_id: str) -> Node:
         """The node with an id.
 

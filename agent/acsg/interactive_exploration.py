@@ -202,7 +202,24 @@ class Explorer:
         if revealed_by is not None:
             for node in new:
                 self.graph.add_edge(revealed_by.id, node, "action-object", "reveals")
+        self._fold_absorbed(detections)
         return new
+
+    def _fold_absorbed(self, detections: list[Detection]) -> None:
+        """Fold the node of each instance the perception has found to be another one (``absorbed``)
+        into that one's: left in, the graph would keep a thing twice. A node something was done to
+        (an action on it, moved away) stays, with a note."""
+        for det in detections:
+            for instance in det.hints.get("absorbed", ()):
+                other = object_id(instance)
+                if other == det.id or other not in self.graph or det.id not in self.graph:
+                    continue
+                if other in self.moved_away or self.graph.successors(other, "object-action"):
+                    self.notes.append(f"{other} is {det.id}, but was acted on: both kept")
+                    continue
+                self.graph.merge_objects(det.id, other)
+                self.unexplored.pop(other, None)
+                self.visible.pop(other, None)
 
     def _add_relations(self) -> None:
         waiting = []
