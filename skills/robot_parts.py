@@ -8,7 +8,7 @@ it opened.
   refine the geometry (and, with a `StandConfig`, a second stand when the refined geometry cannot
   be opened from the first), the skill; then the wrist camera into the opening and the arm stowed
   again; or, with ``hold_open``, a door kept in hand, pulled open, and a head-camera look while it
-  is held;
+  is held; an open that fails with the part left ajar pushes it shut again (`AJAR`);
 - close: the geometry and opening remembered from the open, from the same stand, grasping the
   handle anew, or pushing it shut from the grasp it is held by; a close that fails while the part
   still stands open is tried once more, from a fresh look at how far it stands open (a door let go
@@ -47,6 +47,8 @@ SEEN_PART_M = 0.25
 #: ... and its points, carried by the opening found, lie within this (median) of the view: a
 #: neighbouring drawer's handle, seen where the opened one's hides behind the arm, fits no opening.
 SEEN_FIT_M = 0.03
+#: A part a failed open left standing open by more than this (m, rad) is pushed shut again.
+AJAR = {"drawer": 0.005, "door": math.radians(2.0)}
 
 
 @dataclass(frozen=True)
@@ -176,12 +178,26 @@ class DoorsAndDrawers:
         amount = self._seen_opening(geometry, part, handle, result.achieved)
         if not result.ok:
             self.opened[part.id] = Opened(geometry, amount, stand, closed_centre)
-            return SkillResult(False, result.reason)
+            return SkillResult(False, self._shut_after_failed_open(part, result.reason))
         look = self._look_point(geometry, part, amount, closed_centre)
         self.opened[part.id] = Opened(geometry, amount, stand, look)
         if geometry.kind in self.look_inside:
             self._look_into(look)
         return SkillResult(True)
+
+    def _shut_after_failed_open(self, part: Instance, reason: str) -> str:
+        """Push shut a part that an open which failed left ajar (a drawer held back 2 cm out, a
+        door stopped part of the way by what stands in its swing): the exploration undoes only
+        what succeeded, and the scene is to be left as it was found.
+
+        Returns:
+            ``reason``, with how the part was left when it stands open.
+        """
+        if self.opening(part) <= AJAR[part.label if part.label in AJAR else "drawer"]:
+            self.opened.pop(part.id, None)
+            return reason
+        shut = self.close_part(part)
+        return f"{reason}; pushed shut again" if shut.ok else f"{reason}; left open: {shut.reason}"
 
     def _stand_for(self, geometry: PartGeometry, routes: Routes | None) -> tuple[Pose2D, float | None]:
         """Where to stand to open ``geometry`` and how far to open it (None: the skill's default)."""

@@ -87,3 +87,13 @@ def test_memory_ids_are_put_in_the_ground_truth_s_terms_by_their_last_segmentati
 
 def _instance(key: int, hint: int) -> Instance:
     return Instance(key, "thing", None, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int32), 0.01, 0, 0, hint)
+
+
+
+def test_a_drawer_a_failed_open_left_ajar_is_pushed_shut_again() -> None:
+    # drawer-door 1002 (tuning-wide): the first drawer's pull lets go of the handle 2.3 cm out. An
+    # open that failed is not undone by the exploration, and the drawer was left standing ajar.
+    row = run_robot("drawer-door", 1002)
+    (failed,) = row["failed_actions"]
+    assert "did not open" in failed and failed.endswith("pushed shut again"), failed
+    assert row["state_recovered"] and row["success"]
