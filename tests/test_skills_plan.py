@@ -16,6 +16,7 @@ from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
 from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
                                hand_bottom, hand_touches)
+from skills.arm.pick_plans import HIGH_ABOVE_M
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -207,7 +208,8 @@ def test_a_pick_too_wide_for_the_fingers_rests_the_fingertips_on_its_top(planner
     top, place = np.array([0.25, -0.15, 0.87]), np.array([0.45, -0.2, 0.87])
     plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.12, 0.15, 0.115), place, surface_z=SURFACE)
     assert plan.info["grasp"] == "fingertips-on-top"
-    assert [s.name for s in plan.steps] == ["to above the object", "close the fingers", "down onto the object's top",
+    assert [s.name for s in plan.steps] == ["to high above the object", "down to above the object",
+                                            "close the fingers", "down onto the object's top",
                                             "grasp the object", "lift", "carry", "lower", "put the object down",
                                             "back up", "to ready"]
     _check_runnable(plan, np.array(STOWED))
@@ -263,11 +265,19 @@ def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_pl
     # it is held by its top.
     carton = planner.plan_pick(np.array(STOWED), BASE, top, (0.07, 0.07, 0.2), place, surface_z=SURFACE)
     assert carton.info["grasp"] == "fingertips-on-top"
-    assert [s.name for s in plan.steps] == ["to above the object", "down onto the object", "grasp the object", "lift",
-                                            "carry", "lower", "put the object down", "back up", "to ready"]
-    assert plan.steps[2].expect_held == "object"
+    assert [s.name for s in plan.steps] == ["to high above the object", "down to above the object",
+                                            "down onto the object", "grasp the object", "lift", "carry", "lower",
+                                            "put the object down", "back up", "to ready"]
+    assert plan.steps[3].expect_held == "object"
     _check_runnable(plan, np.array(STOWED))
     steps = {step.name: step for step in plan.steps}
+    # The free move ends HIGH_ABOVE_M over the pose above the object; the hand comes straight down
+    # from there (a joint path to the pose above swept a finger across a tall carton's top).
+    high, above = (_tcp(planner, steps["down to above the object"].samples[k]) for k in (0, -1))
+    assert high[2, 3] - above[2, 3] == pytest.approx(HIGH_ABOVE_M, abs=0.01)
+    for q in steps["down to above the object"].samples[::3]:
+        assert np.linalg.norm(_tcp(planner, q)[:2, 3] - above[:2, 3]) < 0.003
+    assert steps["down to above the object"].stop_on_contact
     depth = plan.info["grasp_depth_m"]
     grasp = _tcp(planner, steps["down onto the object"].samples[-1])
     assert grasp[:3, 3] == pytest.approx(top - [0, 0, depth], abs=0.002)

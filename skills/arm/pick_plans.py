@@ -1,6 +1,6 @@
 """Plans for picking an object away and back: top-down.
 
-Above the object, down onto its top (the fingers closing across the line of sight from the robot
+Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto its top (the fingers closing across the line of sight from the robot
 where the object fits that way, since perception places things worst along it, unless the hand
 would touch less of what stands near coming down another way; an object wider
 than the opening is held by the closed fingertips brought down onto its top until they touch,
@@ -29,6 +29,10 @@ from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, check
 #: on its top. The memory places things to within its 1 cm voxels: a 7 cm carton in the 8 cm
 #: opening, 5 mm either side, was missed by a finger landing on its top.
 STRADDLE_CLEARANCE_M = 0.008
+#: The hand comes to the pose above an object from this much (m) higher, straight down: a free
+#: move's joint path to that pose swept a finger across the top of a 20 cm milk carton put down
+#: near the base, which stopped the pick back (occlusion 1000 of tuning-wide).
+HIGH_ABOVE_M = 0.12
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -79,26 +83,30 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     for way, grasp, release, _ in ways:
         above_grasp, above_release = shifted(grasp, lift_m * UP), shifted(release, lift_m * UP)
         down = "down onto the object's top" if way.touch else "down onto the object"
+        rest = [(down, "line", grasp), ("lift", "line", above_grasp), ("carry", "line", above_release),
+                ("lower", "line", release), ("back up", "line", above_release)]
+        from_high = [("high above the object", "free", shifted(above_grasp, HIGH_ABOVE_M * UP)),
+                     ("above the object", "line", above_grasp)]
         try:
-            chain = ik.chain([
-                ("above the object", "free", above_grasp),
-                (down, "line", grasp),
-                ("lift", "line", above_grasp),
-                ("carry", "line", above_release),
-                ("lower", "line", release),
-                ("back up", "line", above_release),
-            ])
-            descent = searched(ik, chain[1], grasp, down) if way.touch else chain[1]
+            try:  # in from higher up, straight down onto the pose above it (see HIGH_ABOVE_M)
+                chains = ik.chain([*from_high, *rest])
+            except SkillPlanError:
+                chains = ik.chain([("above the object", "free", above_grasp), *rest])
+            come, chain = chains[:-len(rest)], chains[-len(rest):]
+            descent = searched(ik, chain[0], grasp, down) if way.touch else chain[0]
         except SkillPlanError as error:
             failures.append(str(error))
             continue
-        builder.free_move("to above the object", chain[0][-1])
+        builder.free_move("to above the object" if len(come) == 1 else "to high above the object", come[0][-1])
+        if len(come) == 2:
+            builder.move("down to above the object", come[1], careful=True, stop_on_contact=True,
+                         tcp_target=above_grasp)
         builder.grasp(way, down, descent, grasp, "object")
-        builder.move("lift", chain[2], careful=True, tcp_target=above_grasp)
-        builder.move("carry", chain[3], careful=False, tcp_target=above_release)
-        builder.move("lower", chain[4], careful=True, tcp_target=release, touch="support")
+        builder.move("lift", chain[1], careful=True, tcp_target=above_grasp)
+        builder.move("carry", chain[2], careful=False, tcp_target=above_release)
+        builder.move("lower", chain[3], careful=True, tcp_target=release, touch="support")
         builder.gripper("open", "put the object down")
-        builder.move("back up", chain[5], careful=True, tcp_target=above_release)
+        builder.move("back up", chain[4], careful=True, tcp_target=above_release)
         builder.free_move("to ready", arm.ready, via_ready=False)
         info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
                 "grasp_depth_m": way.depth, "grasp": way.name}
