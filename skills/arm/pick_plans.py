@@ -29,9 +29,10 @@ from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, check
 #: on its top. The memory places things to within its 1 cm voxels: a 7 cm carton in the 8 cm
 #: opening, 5 mm either side, was missed by a finger landing on its top.
 STRADDLE_CLEARANCE_M = 0.008
-#: The hand comes to the pose above an object from this much (m) higher, straight down: a free
-#: move's joint path to that pose swept a finger across the top of a 20 cm milk carton put down
-#: near the base, which stopped the pick back (occlusion 1000 of tuning-wide).
+#: The hand comes to the pose above an object from this much (m) higher, straight down, where
+#: nothing remembered stands up there: a free move's joint path to that pose swept a finger across
+#: the top of a 20 cm milk carton put down near the base, which stopped the pick back (occlusion
+#: 1000 of tuning-wide).
 HIGH_ABOVE_M = 0.12
 
 
@@ -85,13 +86,16 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         down = "down onto the object's top" if way.touch else "down onto the object"
         rest = [(down, "line", grasp), ("lift", "line", above_grasp), ("carry", "line", above_release),
                 ("lower", "line", release), ("back up", "line", above_release)]
+        direct = [("above the object", "free", above_grasp)]
         from_high = [("high above the object", "free", shifted(above_grasp, HIGH_ABOVE_M * UP)),
-                     ("above the object", "line", above_grasp)]
+                     ("above the object", "line", above_grasp)] if _open_above(above_grasp, keep_off) else []
         try:
             try:  # in from higher up, straight down onto the pose above it (see HIGH_ABOVE_M)
-                chains = ik.chain([*from_high, *rest])
+                chains = ik.chain([*(from_high or direct), *rest])
             except SkillPlanError:
-                chains = ik.chain([("above the object", "free", above_grasp), *rest])
+                if not from_high:
+                    raise
+                chains = ik.chain([*direct, *rest])
             come, chain = chains[:-len(rest)], chains[-len(rest):]
             descent = searched(ik, chain[0], grasp, down) if way.touch else chain[0]
         except SkillPlanError as error:
@@ -112,6 +116,14 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 "grasp_depth_m": way.depth, "grasp": way.name}
         return builder.finish(skill, info, ik)
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _open_above(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
+    """Whether the hand may come down onto ``pose`` from `HIGH_ABOVE_M` higher: none of ``keep_off``
+    stands in its way up there (the board over a box inside a cabinet, a door standing open over
+    it: the hand pushed the door on its way in)."""
+    return not any(hand_touches(shifted(pose, height * UP), keep_off)
+                   for height in np.arange(0.02, HIGH_ABOVE_M + 1e-9, 0.02))
 
 
 def _touched(grasp: np.ndarray, release: np.ndarray, lift_m: float, keep_off: np.ndarray | None) -> int:
