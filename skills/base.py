@@ -150,7 +150,7 @@ class ArmSkill(PortedSkill):
         self._contacts: list[dict[str, Any]] = []
         self._run_began: float | None = None
         self._planning_ms = 0.0
-        self._holding_after_error = False
+        self._holding_still = False
         self._failure = ""
         self._request_error = ""
 
@@ -241,11 +241,11 @@ class ArmSkill(PortedSkill):
         if step.kind == "gripper":
             moved_part = self._index > 0 and self._steps[self._index - 1].part_motion is not None
             off_target = self._last["final_error"] > HOLD_RAD
-            if step.action == "open" and (off_target or moved_part) and not self._holding_after_error:
-                self._holding_after_error = True  # hold where the arm is before letting go
+            if step.action == "open" and (off_target or moved_part) and not self._holding_still:
+                self._holding_still = True  # hold where the arm is before letting go
                 hold = planner.hold(self._last["q"], SETTLE_S if moved_part else 0.0)
                 return self._send(lambda: self._send_move(hold))
-            self._holding_after_error = False
+            self._holding_still = False
             return self._send(lambda: self._ask("gripper", {"action": step.action}))
         if step.samples is not None and np.abs(step.samples[0] - self._last["q"]).max() > RETIME_RAD:
             try:
@@ -280,7 +280,7 @@ class ArmSkill(PortedSkill):
         except ValueError as error:
             return self._fail(f"{self._doing()}: {error}")
         previous, self._last = self._last, state
-        if self._holding_after_error and self._steps[self._index].kind == "gripper":
+        if self._holding_still and self._steps[self._index].kind == "gripper":
             return self._next()  # the hold is done; now let go
         step = self._steps[self._index]
         if step.kind != "gripper":
@@ -302,7 +302,7 @@ class ArmSkill(PortedSkill):
             return "asking for the arm's state"
         if self._phase == "release":
             return "letting go after a failure"
-        if self._holding_after_error:
+        if self._holding_still:
             return "holding the arm still before letting go"
         if self._index < len(self._steps):
             step = self._steps[self._index]

@@ -193,8 +193,9 @@ class DoorsAndDrawers:
         Returns:
             ``reason``, with how the part was left when it stands open.
         """
-        if self.opening(part) <= AJAR[part.label if part.label in AJAR else "drawer"]:
-            self.opened.pop(part.id, None)
+        opened = self.opened[part.id]
+        if opened.amount <= AJAR[opened.geometry.kind]:
+            del self.opened[part.id]
             return reason
         shut = self.close_part(part)
         return f"{reason}; pushed shut again" if shut.ok else f"{reason}; left open: {shut.reason}"
