@@ -13,6 +13,7 @@ released object down onto whatever is under it), open, back up, ready.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -86,16 +87,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         down = "down onto the object's top" if way.touch else "down onto the object"
         rest = [(down, "line", grasp), ("lift", "line", above_grasp), ("carry", "line", above_release),
                 ("lower", "line", release), ("back up", "line", above_release)]
-        direct = [("above the object", "free", above_grasp)]
-        from_high = [("high above the object", "free", shifted(above_grasp, HIGH_ABOVE_M * UP)),
-                     ("above the object", "line", above_grasp)] if _open_above(above_grasp, keep_off) else []
         try:
-            try:  # in from higher up, straight down onto the pose above it (see HIGH_ABOVE_M)
-                chains = ik.chain([*(from_high or direct), *rest])
-            except SkillPlanError:
-                if not from_high:
-                    raise
-                chains = ik.chain([*direct, *rest])
+            chains = _chain_from_above(ik, above_grasp, rest, keep_off)
             come, chain = chains[:-len(rest)], chains[-len(rest):]
             descent = searched(ik, chain[0], grasp, down) if way.touch else chain[0]
         except SkillPlanError as error:
@@ -116,6 +109,19 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 "grasp_depth_m": way.depth, "grasp": way.name}
         return builder.finish(skill, info, ik)
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _chain_from_above(ik: IKSearch, above: np.ndarray, rest: list[tuple[str, str, Any]],
+                      keep_off: np.ndarray | None) -> list[np.ndarray]:
+    """The pick's chain, coming to the pose ``above`` the object from `HIGH_ABOVE_M` higher,
+    straight down, where `_open_above`; else, or where that is out of reach, straight to it."""
+    if _open_above(above, keep_off):
+        try:
+            return ik.chain([("high above the object", "free", shifted(above, HIGH_ABOVE_M * UP)),
+                             ("above the object", "line", above), *rest])
+        except SkillPlanError:
+            pass  # out of reach up there: as before
+    return ik.chain([("above the object", "free", above), *rest])
 
 
 def _open_above(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
