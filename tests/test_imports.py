@@ -32,7 +32,7 @@ FRAMEWORKS = ("py_trees", "zenoh", "pybullet")
 _CHILDREN = r'''
 import importlib, json, os, sys
 modules, preload, banned = json.loads(sys.argv[1]), json.loads(sys.argv[2]), json.loads(sys.argv[3])
-OWN = ("agent", "behaviours", "skills", "worlds")
+own = {module.split(".")[0] for module in modules}  # the packages checked: never preloaded
 
 def in_child(work):
     read, write = os.pipe()
@@ -60,7 +60,7 @@ def brought_along():
             importlib.import_module(module)
         except BaseException:
             pass  # reported by its own child below
-    return json.dumps([name for name in sys.modules if name not in before and name.split(".")[0] not in OWN
+    return json.dumps([name for name in sys.modules if name not in before and name.split(".")[0] not in own
                        and name.split(".")[0] not in banned])
 
 for name in preload:

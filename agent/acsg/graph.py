@@ -139,11 +139,11 @@ class ACSG:
             self._in[target].pop(source, None)
         del self._nodes[other], self._out[other], self._in[other]
         for source, target, edge in moved:
-            if source == target or self.edge(source, target) is not None or self.edge(target, source) is not None:
-                continue
+            if source == target or self.edge(source, target) is not None:
+                continue  # keep's own account stands
             try:
                 self.add_edge(source, target, edge.kind, edge.relation)
-            except ACSGError:  # a cycle, or a clash with an edge keep has: keep's own account stands
+            except ACSGError:  # a cycle through keep
                 continue
 
     def node(self, node_id: str) -> Node:
