@@ -28,9 +28,10 @@ from worlds.bus.session import EndpointError  # noqa: E402 (after the Ctrl-C han
 from agent.app.cli import bench, calibrate, eval, inspect, replay, run, skills, suite, watch  # noqa: E402
 from agent.app.cli.options import INTERRUPTED  # noqa: E402
 from agent.app.config import ConfigError  # noqa: E402
+from agent.app.runtime import interrupt  # noqa: E402
 
 if _LOADING:
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    interrupt.install()
 
 #: Commands with a parser of their own, handed the words after their name: command -> (the module
 #: whose ``main(argv)`` runs it, the help line shown here).

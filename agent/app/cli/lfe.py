@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 from agent.app.cli.options import add_ray_option, count_option, seed_option
+from agent.app.runtime import interrupt
 
 DEFAULT_DATA = Path("runs/lfe-data")
 DEFAULT_TRAIN = Path("runs/lfe-train")
@@ -90,6 +91,7 @@ def _data(args: argparse.Namespace) -> int:
             sys.stderr.write(f"\r  {done}/{total} homes, last one {samples} maps, ~{rate * (total - done) / 60:.0f} min "
                              f"left   {end}")
         sys.stderr.flush()
+        interrupt.check()
 
     seeds = range(args.first_seed, args.first_seed + args.homes)
     summary = generate_dataset(args.out, seeds, workers=args.workers, progress=progress, ray=args.ray)
@@ -123,6 +125,7 @@ def print_training(event: dict) -> None:
     Args:
         event: the training's progress event.
     """
+    interrupt.check()
     kind = event["event"]
     if kind == "step":
         sys.stderr.write(f"\r  epoch {event['epoch']}: step {event['step']}/{event['steps']}, "

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from agent.app.cli.options import Commands, count_option, seed_option
+from agent.app.runtime import interrupt
 
 
 def add_command(commands: Commands) -> None:
@@ -51,6 +52,7 @@ def _suite_make(args: argparse.Namespace) -> int:
     def progress(part: str, done: int, total: int) -> None:
         end = "\n" if done == total else ""
         print(f"\r  {part}: {done}/{total} scenarios", end=end, file=sys.stderr, flush=True)
+        interrupt.check()
 
     kinds = tuple(k.strip() for k in args.kinds.split(",")) if args.kinds else None
     hidden = {"any": None, "only": True, "never": False}[args.hidden]

@@ -33,7 +33,7 @@ from worlds.bus.liveness import describe_exit
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
 from agent.app.runtime.episode_bus import EpisodeBus
-from agent.app.runtime import ray_backend
+from agent.app.runtime import interrupt, ray_backend
 from agent.app.runtime.pool import in_processes, quiet_worker
 from agent.app.runtime.run import RunError, RunRequest, run_episode
 from agent.app.runtime.world_process import WorldProcess, WorldStartError
@@ -176,6 +176,7 @@ def append_results(path: Path, finished: Iterator[tuple[Any, dict[str, Any]]], t
             out.flush()
             if progress:
                 progress(done, total, result)
+            interrupt.check()  # a Ctrl-C lost while the result came in
 
 
 def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None]:

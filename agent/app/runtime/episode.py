@@ -26,6 +26,7 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import blackboard as bb
+from agent.app.runtime import interrupt
 from agent.app.runtime.control import EpisodeControl, InjectedFault, instrument
 from agent.app.runtime.snapshot import SnapshotEncoder
 
@@ -100,6 +101,7 @@ class EpisodeRunner:
         encoder = SnapshotEncoder(self.run_id)
         try:
             while True:
+                interrupt.check()  # a Ctrl-C the last tick's libraries lost
                 self.wake.clear()  # what comes in from here on, during the tick too, ends the wait after it
                 self.control.before_tick()
                 ticks += 1
@@ -119,6 +121,7 @@ class EpisodeRunner:
                 if self.tree.root.status == Status.RUNNING:
                     self._wait(tick_started)
         except KeyboardInterrupt:
+            interrupt.clear()
             return EpisodeOutcome("interrupted", f"interrupted (SIGINT) during tick {ticks}", None, ticks,
                                   time.monotonic() - started)
         finally:
