@@ -22,7 +22,15 @@ _requested = threading.Event()
 
 
 def on_sigint(signum: int, frame: FrameType | None) -> None:
-    """The SIGINT handler: note the Ctrl-C for `check`, and raise it as Python's own handler does."""
+    """The SIGINT handler: note the Ctrl-C for `check`, and raise it as Python's own handler does.
+
+    Args:
+        signum: the signal's number (SIGINT).
+        frame: the frame it interrupted (unused).
+
+    Raises:
+        KeyboardInterrupt: always, as Python's own handler does.
+    """
     _requested.set()
     raise KeyboardInterrupt
 
