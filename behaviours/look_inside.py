@@ -286,7 +286,7 @@ class LookInside(py_trees.behaviour.Behaviour):
         then those seen since, up to ``max_parts``): open, look, close, stow. It stops at a part it
         could not shut or stow after, and once ``stop`` is set. Never raises: the records say why."""
         robot = Robot(self.link, RobotConfig(skill_timeout_s=self.config.skill_timeout_s, stand=self.config.stand,
-                                             hold_open=True, scan_table_edge=False),  # storage stands on the floor
+                                             hold_open=True, see_table_edge=False),  # storage stands on the floor
                       memory=state.memory, routes=routes)
         robot.body.skill_listeners.append(state.arm)
         piece = first.parent if first.parent is not None else first.id

@@ -1,7 +1,8 @@
 """The robot as Algorithm 1 sees it: a `Perception` and a `SkillExecutor` over the world link.
 
-Perception is the head camera, seen from where the robot started (the whole table in view), and
-the wrist camera looking into whatever a skill has just opened; both frames are fused in one
+Perception is the head camera, looking from where the robot started or, where the table's near
+edge is out of its view from there, from a little further back (``lookout``: the whole table in
+view), and the wrist camera looking into whatever a skill has just opened; both frames are fused in one
 `InstanceMemory`, whose instances become the explorer's detections (`memory_detections`). The
 memory's ids are the ACSG's: the simulator's segmentation ids are never used to act.
 
@@ -12,8 +13,8 @@ while this object waits. `Robot` composes three parts:
 
 - `skills.robot_body.RobotBody`: running a skill by name, head and wrist frames, driving the
   base, the tables and counters remembered; every skill run is kept in its ``skill_times``;
-- `skills.robot_parts.DoorsAndDrawers`: opening and closing doors and drawers, and what stands
-  open;
+- `skills.robot_parts.DoorsAndDrawers`: opening and closing doors and drawers, what stands
+  open and what was shut again;
 - `skills.robot_picks.Picks`: picking things away out of the way and back.
 
 The first `Robot.observe` sets where the robot started (``home``); opening a part or picking a
@@ -53,8 +54,11 @@ log = logging.getLogger(__name__)
 
 #: The table-edge scan (`Robot.scan_table_edge`): the wrist camera's height over the top, how far
 #: apart its views are across the table, how far to either side of the base they go (m), and how
-#: near the first row the head camera sees the top must come for the scan to be needed.
+#: near the first row the head camera sees the top must come for the table's edge to count as
+#: out of view (`Robot.see_table_edge`).
 EDGE_STANDOFF_M, EDGE_STEP_M, EDGE_REACH_M, EDGE_SEEN_M = 0.4, 0.6, 0.7, 0.05
+#: How far (m) from the robot's body the head camera's first row comes from the lookout.
+LOOK_MARGIN_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -69,11 +73,11 @@ class RobotConfig:
     parts not looked into with the wrist camera are opened holding the handle, looked at with the
     head camera so, and pushed shut from the same grasp: let go, a door may swing on past where
     it was pulled, and a second grasp, aimed from a look at how far it stands open, may miss.
-    ``scan_table_edge``: at the first look, the wrist camera also looks along the near edge of the
-    table the robot stands at (`Robot.scan_table_edge`), below the head camera's view."""
+    ``see_table_edge``: at the first look, the robot makes sure the head camera sees the near edge
+    of the table it stands at, backing away from it to look (`Robot.see_table_edge`)."""
 
     skill_timeout_s: float = 120.0
-    scan_table_edge: bool = True
+    see_table_edge: bool = True
     look_inside: tuple[str, ...] = ("drawer",)
     stand: StandConfig | None = None
     hold_open: bool = False
@@ -96,7 +100,7 @@ class Robot:
         config = self.config
         self.body = RobotBody(self.link, self.memory, self.skills, config.skill_timeout_s)
         self.parts = DoorsAndDrawers(self.body, self.routes, config.look_inside, config.stand, config.hold_open)
-        self.picks = Picks(self.body, config.idle_toward_robot_m, self.parts.drive)
+        self.picks = Picks(self.body, config.idle_toward_robot_m, self.parts)
 
     @property
     def home(self) -> Pose2D | None:
@@ -115,9 +119,9 @@ class Robot:
 
     # ---- Perception ---------------------------------------------------------------------------
     def observe(self) -> list[Detection]:
-        """Back to the start pose, one head frame into the memory. The first call looks from where
-        the robot stands, makes that its ``home`` and, with ``scan_table_edge``, looks along the
-        table's near edge with the wrist camera.
+        """One head frame into the memory, from where the robot looks (`look_from_lookout`). The
+        first call looks from where the robot stands and makes that its ``home``; with
+        ``see_table_edge``, it then makes sure the table's near edge is seen (`see_table_edge`).
 
         Returns:
             The memory's detections.
@@ -126,47 +130,104 @@ class Robot:
             QueryFailed: the world sent no frame.
         """
         body = self.body
-        first = body.home is None
-        if not first:
-            try:
-                self.return_home()
-            except SkillPlanError as error:  # look from where it stands rather than not at all
-                log.info("observe: looking from where the robot stands: %s", error)
-        head = body.frame("head")
-        if first:
-            body.home = body.pose
-        body.memory.integrate(head)
-        if first and self.config.scan_table_edge:
-            self.scan_table_edge(head)
+        if body.home is None:
+            head = body.look("head")
+            body.home = body.lookout = body.pose
+            if self.config.see_table_edge:
+                self.see_table_edge(head)
+        else:
+            self.look_from_lookout()
         return memory_detections(self.memory, body.eye, vacated=self.picks.vacated)
 
-    def scan_table_edge(self, head: Observation) -> None:
-        """Wrist-camera looks, straight down, into the strip of the table before the robot that the
-        head frame does not show: its lowest ray meets a table top about half a metre out, and a
-        cup standing nearer than that is never seen, nor explored. Only where the table's top seen
-        runs into that strip; the looks go across its width as far as the arm reaches
-        (`EDGE_REACH_M`), midway between the robot's body and the first row seen; a view that
-        cannot be reached is skipped, and the arm is folded away afterwards.
+    def look_from_lookout(self) -> Observation:
+        """Back to ``home``, straight back to the ``lookout`` when it lies behind it, one head frame
+        into the memory, and straight forward to ``home`` again: every skill starts from ``home``
+        or a stand along the table from it, and the way forward retraces the way back, with the arm
+        as it was, past what stood there as it stood. A drive that fails leaves the robot to look
+        from where it stands.
+
+        Returns:
+            The head frame.
+
+        Raises:
+            QueryFailed: the world sent no frame.
+        """
+        body = self.body
+        assert body.home is not None and body.lookout is not None
+        try:
+            self.parts.drive(body.home)
+            self.parts.drive(body.lookout)
+        except SkillPlanError as error:  # look from where it stands rather than not at all
+            log.info("observe: looking from where the robot stands: %s", error)
+        head = body.look("head")
+        if body.lookout != body.home:
+            self._back_home()
+        return head
+
+    def _back_home(self) -> None:
+        """Straight forward from the lookout to ``home``; a drive that fails is left for the next
+        skill's own drive to its stand."""
+        assert self.body.home is not None
+        try:
+            self.parts.drive(self.body.home)
+        except SkillPlanError as error:
+            log.info("the base did not get back before the table: %s", error)
+
+    def see_table_edge(self, head: Observation) -> None:
+        """Bring the strip of the table just before the robot into the head camera's view: its
+        lowest ray meets a table top about half a metre out, and a cup standing nearer than that,
+        or a box that a lifted shell leaves there, is never seen. Where the top seen runs into that
+        strip, the base backs away from the table until the whole strip up to the robot's body is in
+        view (to `LOOK_MARGIN_M` from it), looks, and comes back; every later head frame is taken
+        from there (``lookout``, `look_from_lookout`). Where it cannot back away, the wrist camera
+        looks along the strip instead (`scan_table_edge`).
 
         Args:
             head: the head frame just taken from where the robot stands.
         """
         body = self.body
         assert body.pose is not None
-        base, yaw = np.asarray(body.pose[:2]), body.pose[2]
-        ahead, side = np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)])
-        surfaces = body.surfaces()
-        if not surfaces:
+        surface = self._nearest_surface()
+        if surface is None:
             return
-        surface = min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
+        base, ahead = np.asarray(body.pose[:2]), _ahead(body.pose)
         top = surface_top(surface)
         points = surface.points()
         flat = points[points[:, 2] >= top - 0.015, :2] - base
-        forward, across = flat @ ahead, flat @ side
         first_row = nearest_seen_ahead(head.intrinsics, head.camera_to_world, top, base, ahead)
         body.head_sees_from = first_row
-        if float(forward.min()) > first_row + EDGE_SEEN_M:
+        if float(np.min(flat @ ahead)) > first_row + EDGE_SEEN_M:
             return  # the table's edge is in view
+        # How far the top runs on into the strip is not seen: all of it up to the robot's body.
+        back = first_row - body.planner().body_radius + LOOK_MARGIN_M
+        lookout = Pose2D(*(base - back * ahead), body.pose[2])
+        try:
+            self.parts.drive(lookout)
+        except SkillPlanError as error:
+            log.info("the base cannot back away to see the table's edge (%s): the wrist camera looks", error)
+            self.scan_table_edge(top, flat, first_row)
+            return
+        body.lookout = lookout
+        body.look("head")
+        self._back_home()
+
+    def scan_table_edge(self, top: float, flat: np.ndarray, first_row: float) -> None:
+        """Wrist-camera looks, straight down, into the strip of the table before the robot that the
+        head frame does not show, for a robot that cannot back away from the table to see it: the
+        looks go across the table's width as far as the arm reaches (`EDGE_REACH_M`), midway
+        between the robot's body and the first row seen; a view that cannot be reached is skipped,
+        and the arm is folded away afterwards.
+
+        Args:
+            top: the table's top (world z).
+            flat: (N, 2) the top's points seen, relative to the base.
+            first_row: how far ahead of the base the head camera's first row meets the top.
+        """
+        body = self.body
+        assert body.pose is not None
+        base, yaw = np.asarray(body.pose[:2]), body.pose[2]
+        ahead, side = _ahead(body.pose), np.array([-math.sin(yaw), math.cos(yaw)])
+        across = flat @ side
         out = (body.planner().body_radius + first_row) / 2
         lo, hi = max(float(across.min()), -EDGE_REACH_M), min(float(across.max()), EDGE_REACH_M)
         count = max(1, math.ceil((hi - lo) / EDGE_STEP_M))
@@ -217,14 +278,20 @@ class Robot:
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
         return self.picks.pick_back(obj)
 
-    def return_home(self) -> None:
-        """Drive back to where the robot first looked (nothing before the first `observe`).
+    def _nearest_surface(self) -> Instance | None:
+        """The remembered table or counter nearest the base, or None."""
+        body = self.body
+        assert body.pose is not None
+        base = np.asarray(body.pose[:2])
+        surfaces = body.surfaces()
+        if not surfaces:
+            return None
+        return min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
 
-        Raises:
-            SkillPlanError: the base did not get there.
-        """
-        if self.body.home is not None:
-            self.parts.drive(self.body.home)
+
+def _ahead(pose: Pose2D) -> np.ndarray:
+    """The unit vector the base faces."""
+    return np.array([math.cos(pose[2]), math.sin(pose[2])])
 
     def stow(self) -> None:
         """Fold the arm into the base, as it must be for the base to drive on freely.

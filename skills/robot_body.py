@@ -62,9 +62,11 @@ class RobotBody:
         self.skill_timeout_s = skill_timeout_s
         self.context = SkillContext(link)
         self.home: Pose2D | None = None  # where the robot first looked (`skills.robot.Robot.observe`)
+        self.lookout: Pose2D | None = None  # where it takes its head frames from (`skills.robot.Robot.see_table_edge`)
         self.pose: Pose2D | None = None  # where the base is, as the world last said
         self.eye = np.zeros(3)  # the head camera's position at its last frame
-        self.head_sees_from = 0.0  # how far ahead of the start pose the head camera sees the table's top
+        self.head_sees_from = 0.0  # how far ahead of ``home`` its head camera sees a table's top (the strip nearer
+        # is where the arm works from the stands, where things are put down last)
         self.skill_times: list[dict[str, Any]] = []  # per skill run: name, ok, planning, execution, wall time
         self.skill_listeners: list[Callable[[str, ArmResult], None]] = []  # told each run's name and result
 

@@ -85,6 +85,7 @@ class DoorsAndDrawers:
         self.stand = stand
         self.hold_open = hold_open
         self.opened: dict[int, Opened] = {}
+        self.shut: set[int] = set()  # parts this robot opened and shut again: done with, in this exploration
         self.views: list[Observation] = []  # frames taken inside the last part opened
         self.before: Observation | None = None  # the head frame from the stand, before it was opened
 
@@ -95,6 +96,16 @@ class DoorsAndDrawers:
             False while a door this robot opened still stands open.
         """
         return not any(opened.geometry.kind == "door" for opened in self.opened.values())
+
+    def done_with(self) -> set[int]:
+        """The doors and drawers this robot opened and shut again, by their memory ids now: each
+        action is run once, so nothing will reach for their handles or swing them again.
+
+        Returns:
+            The parts' ids.
+        """
+        memory = self.body.memory
+        return {memory.get(part_id).id for part_id in self.shut} - set(self.opened)
 
     def standing_open(self) -> list[np.ndarray]:
         """Where the doors and drawers this robot opened and has not shut again stand now: their
@@ -305,6 +316,7 @@ class DoorsAndDrawers:
             self.opened[part.id] = Opened(opened.geometry, left, opened.stand, opened.look_point)
             return SkillResult(False, result.reason)
         del self.opened[part.id]
+        self.shut.add(part.id)
         return SkillResult(True)
 
     def opening(self, part: Instance) -> float:

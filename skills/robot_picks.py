@@ -13,7 +13,6 @@ found there lay inside it (the Matryoshka's smaller doll).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +27,7 @@ from skills.arm.idle_space import idle_spot, reach_along
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody
+from skills.robot_parts import DoorsAndDrawers
 
 #: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
 #: the evaluation's tolerance for a thing put back.
@@ -56,20 +56,22 @@ class Picks:
     Args:
         body: the robot's body.
         idle_toward_robot_m: how far from the object, towards the robot, the idle spot is sought first.
-        drive: drives the base to a pose knowing what the robot left open
-            (`skills.robot_parts.DoorsAndDrawers.drive`).
+        parts: the doors and drawers the robot opens: the base drives knowing what it left open
+            (`skills.robot_parts.DoorsAndDrawers.drive`), and things are put down out of the way of
+            those it will still reach for.
     """
 
-    def __init__(self, body: RobotBody, idle_toward_robot_m: float, drive: Callable[[Pose2D], None]) -> None:
+    def __init__(self, body: RobotBody, idle_toward_robot_m: float, parts: DoorsAndDrawers) -> None:
         self.body = body
         self.idle_toward_robot_m = idle_toward_robot_m
-        self.drive = drive
+        self.parts = parts
+        self.drive = parts.drive
         self.away: dict[int, Away] = {}
         self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
 
     def pick_away(self, obj: Instance) -> SkillResult:
         """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
-        there is one, in the head camera's view.
+        there is one, beyond the strip before the robot that the arm works over.
 
         Args:
             obj: the thing to move out of the way.
@@ -101,15 +103,16 @@ class Picks:
             lo, hi = reach_along(places, edge_y, PLACE_REACH_M)
             return np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)
 
-        def in_view(places: np.ndarray) -> np.ndarray:
+        def beyond_strip(places: np.ndarray) -> np.ndarray:
             return reachable(places) & (places[:, 1] - edge_y >= body.head_sees_from)
 
-        obstacles, radius = [*others, *kept_clear(body.memory, body.eye, body.home[:2])], float(max(extent[:2])) / 2
-        try:  # where the head camera sees it, so the memory follows it; else before the robot
-            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=in_view,
-                             allowed_means="within the arm's reach and the head camera's view")
+        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with())
+        obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
+        try:  # beyond the strip the arm works over from the robot's stands; else in it
+            spot = idle_spot(surface.points(), obstacles, radius, near, height=float(extent[2]), allowed=beyond_strip,
+                             allowed_means="within the arm's reach beyond the strip before the robot")
         except SkillPlanError:
-            spot = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+            spot = idle_spot(surface.points(), obstacles, radius, near, height=float(extent[2]), allowed=reachable,
                              allowed_means="within the arm's reach")
         (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))

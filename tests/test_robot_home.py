@@ -67,7 +67,7 @@ def test_picking_away_before_the_first_look_fails_without_asking_the_world() -> 
 
 def test_the_first_look_makes_where_the_robot_stands_its_home() -> None:
     link = EmptyView([1.0, 2.0, 0.5])
-    robot = Robot(link, RobotConfig(scan_table_edge=False))  # type: ignore[arg-type]
+    robot = Robot(link, RobotConfig(see_table_edge=False))  # type: ignore[arg-type]
     assert robot.home is None
     robot.observe()
     assert link.calls == ["observe"]

@@ -51,3 +51,18 @@ def test_the_stands_reaching_a_point_are_an_interval_along_the_edge() -> None:
     assert lo[0] == pytest.approx(0.3 - 0.6) and hi[0] == pytest.approx(0.3 + 0.6)  # 0.8 m out: 0.6 either way
     assert lo[1] > hi[1]  # 1.6 m out: no stand reaches it
     assert (lo[2], hi[2]) == pytest.approx((-1.0, 1.0))
+
+
+def test_things_lower_than_where_the_hand_works_keep_only_the_object_s_own_room() -> None:
+    table = _table()
+    soap = np.column_stack([np.full(9, 0.1), np.linspace(-0.03, 0.03, 9), np.full(9, 0.78)])  # 3 cm tall
+    bottle = np.column_stack([np.full(9, -0.3), np.linspace(-0.02, 0.02, 9), np.full(9, 0.99)])
+    near = (0.16, 0.0)
+    spot = idle_spot(table, [soap, bottle], 0.04, near, height=0.12)  # a box 12 cm tall: the hand above the soap
+    gap = float(np.min(np.linalg.norm(soap[:, :2] - spot[:2], axis=1)))
+    assert 0.04 + 0.03 - 1e-9 <= gap < 0.11 + 0.03
+    assert float(np.min(np.linalg.norm(bottle[:, :2] - spot[:2], axis=1))) >= 0.11 + 0.03 - 1e-9
+    unknown = idle_spot(table, [soap, bottle], 0.04, near)  # no height: everything counts for the hand
+    assert float(np.min(np.linalg.norm(soap[:, :2] - unknown[:2], axis=1))) >= 0.11 + 0.03 - 1e-9
+    flat = idle_spot(table, [soap], 0.04, near, height=0.05)  # as low as the soap: the hand meets it
+    assert float(np.min(np.linalg.norm(soap[:, :2] - flat[:2], axis=1))) >= 0.11 + 0.03 - 1e-9

@@ -12,6 +12,7 @@ from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from agent.perception.part_motion import moved_geometry
 from skills.arm.arm_model import READY
+from skills.arm.clearance import Clearance
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
 from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
@@ -375,3 +376,19 @@ def test_stowing_from_a_hand_left_out_backs_it_straight_out_first(planner: ArmPl
     assert 0.0 < lift < SPEC.joints[0].upper
     # From the ready pose there is nothing to back out of.
     assert [step.name for step in planner.plan_stow(planner.ready, BASE).steps] == ["to the stowed pose"]
+
+
+def test_a_box_put_down_close_before_the_robot_keeps_the_elbow_off_the_table(planner: ArmPlanner) -> None:
+    # recursive 1021 (tuning-wide): a shell put back 0.48 m before the base; the posture the carry
+    # came with lowered it with the elbow on the table, which held the arm back 13 cm short of the
+    # place, and the shell was let go onto the cup it was to cover.
+    base_pose = (0.435, -0.69, math.pi / 2)
+    top, place = np.array([0.636, -0.183, 0.87]), np.array([0.435, -0.21, 0.864])
+    plan = planner.plan_pick(np.array(READY), base_pose, top, (0.12, 0.12, 0.11), place, skill="pick_back",
+                             surface_z=SURFACE)
+    clearance = Clearance(planner, base_transform(base_pose), SURFACE)
+    for step in plan.steps:
+        if step.kind == "move":
+            assert clearance.path_problem(step.samples, every=2) is None, step.name
+    release = base_transform(base_pose) @ planner.kin.forward(plan.steps[-4].samples[-1])
+    assert release[:2, 3] == pytest.approx(place[:2], abs=0.002)

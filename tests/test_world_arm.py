@@ -312,6 +312,39 @@ def test_a_picked_object_moves_with_the_hand_and_stays_where_it_is_put_down() ->
         world.close()
 
 
+def test_an_open_bottomed_box_put_back_over_what_it_covered_stands_on_its_walls() -> None:
+    """The shell is held by the closed fingertips on its lid, lifted off the smaller shell it
+    covers and let go of where it stood: it stands on the table around that shell, not on its top."""
+    scene = tabletop_variant("recursive", 1000)
+    nest = [obj for obj in scene.objects if obj.instance_id in (3, 4, 5)]  # shell over shell over soap
+    assert [obj.shape for obj in nest] == ["shell", "shell", "box"]
+    shift = np.array([0.0, -0.22, 0.0]) - [*nest[0].center[:2], 0.0]  # within the arm's top-down reach
+    moved = {obj.instance_id: dataclasses.replace(obj, center=tuple(np.add(obj.center, shift))) for obj in nest}
+    scene = dataclasses.replace(scene, objects=tuple(moved.get(obj.instance_id, obj) for obj in scene.objects))
+    outer = moved[3]
+    world = World(CameraConfig())
+    ik = _IK(world.start_tabletop(scene))
+    try:
+        start = np.array(world.object_position(outer.instance_id))
+        lid = start + [0.0, 0.0, outer.dims[2] / 2]
+        _go(world, READY)
+        assert world.gripper(close=True) is None  # the fingers closed, on nothing yet
+        q = _line(world, ik, ik.solve(READY, lid + [0, 0, 0.15], DOWN), [lid + [0, 0, 0.01]], DOWN)
+        q = ik.solve(q, lid - [0, 0, 0.01], DOWN)
+        assert _go(world, q, 0.1).contacts  # the fingertips on the lid
+        held = world.gripper(close=True)
+        assert held is not None and held["id"] == outer.instance_id
+        q = _line(world, ik, q, [lid + [0, 0, 0.03 * k] for k in range(1, 5)], DOWN)
+        q = _line(world, ik, q, [lid + [0, 0, 0.12 - 0.03 * k] for k in range(1, 4)], DOWN)  # 3 cm over its place
+        assert world.gripper(close=False) is None
+        put = np.array(world.object_position(outer.instance_id))
+        assert put[:2] == pytest.approx(start[:2], abs=0.01)
+        assert put[2] == pytest.approx(start[2], abs=1e-3)  # on the table, the inner shell under its lid
+    finally:
+        ik.close()
+        world.close()
+
+
 def test_contacts_are_reported_and_can_stop_the_motion() -> None:
     scene = tabletop_variant("drawer-only", 6)
     world = World(CameraConfig())

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from worlds.arm import Touch, TrajectoryRun
-from worlds.body import OUT_OF_SIGHT, RobotBody
+from worlds.arm import Touch, TrajectoryRun, position_quaternion
+from worlds.body import RobotBody
 from worlds.stage import Stage
 from worlds.things import Label
 
@@ -170,19 +170,72 @@ def _graspable(stage: Stage, body: RobotBody, touches: list[Touch]) -> tuple[int
 
 
 def _put_down(stage: Stage, body: RobotBody, carried: int) -> None:
-    """Let a carried object down straight onto the highest thing under its footprint (the floor
-    level when nothing is), and make it ride on that thing."""
+    """Let a carried object down straight until its own shape meets something (the floor level when
+    nothing does), and make it ride on what it rests on. Its shape, not its box, meets what is
+    below: an open-bottomed box put back over the smaller thing it covered stands on its walls
+    around it, not on that thing's top. It lands on the face it was nearest standing on
+    (`_settled`): a hand a degree or two off the one that lifted it tilts what it carries."""
     client = stage.client
-    lo, hi = p.getAABB(carried, -1, physicsClientId=client)
     position, orientation = p.getBasePositionAndOrientation(carried, physicsClientId=client)
-    p.resetBasePositionAndOrientation(carried, OUT_OF_SIGHT, orientation, physicsClientId=client)
+    orientation = _settled(orientation)
     with body.out_of_sight():
-        xs = (*np.linspace(lo[0], hi[0], 4)[1:-1], (lo[0] + hi[0]) / 2)  # a 3 x 3 grid inside the footprint
-        ys = (*np.linspace(lo[1], hi[1], 4)[1:-1], (lo[1] + hi[1]) / 2)
-        starts = [(float(x), float(y), lo[2] + 0.02) for x in xs for y in ys]
-        hits = p.rayTestBatch(starts, [(x, y, lo[2] - 3.0) for x, y, _ in starts], physicsClientId=client)
-    found = [(hit[3][2], (hit[0], hit[1])) for hit in hits if hit[0] >= 0]
-    top, support = max(found, default=(0.0, None))
-    dropped = (position[0], position[1], position[2] + top - lo[2])
+        drop, support = _fall(client, carried, position, orientation)
+    dropped = (position[0], position[1], position[2] - drop)
     p.resetBasePositionAndOrientation(carried, dropped, orientation, physicsClientId=client)
     stage.riders.put(stage.item_of(carried), support)
+
+
+def _settled(orientation: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """``orientation`` turned the least way that stands the body's axis nearest the vertical exactly
+    upright (or upside down): how a thing let go of a little tilted comes to rest on a flat top."""
+    rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+    k = int(np.argmax(np.abs(rotation[2])))
+    axis = rotation[:, k]
+    upright = np.array([0.0, 0.0, math.copysign(1.0, axis[2])])
+    turn = np.cross(axis, upright)
+    sine, cosine = float(np.linalg.norm(turn)), float(axis @ upright)
+    if sine < 1e-12:
+        return orientation
+    turn /= sine
+    skew = np.array([[0.0, -turn[2], turn[1]], [turn[2], 0.0, -turn[0]], [-turn[1], turn[0], 0.0]])
+    righting = np.eye(3) + sine * skew + (1.0 - cosine) * skew @ skew
+    pose = np.eye(4)
+    pose[:3, :3] = righting @ rotation
+    return tuple(position_quaternion(pose)[1])  # type: ignore[return-value]
+
+
+#: How finely (m) a falling object's resting height is found, and the steps it first falls by.
+FALL_TOLERANCE_M, FALL_STEP_M = 0.0005, 0.005
+
+
+def _fall(client: int, carried: int, position: tuple[float, float, float],
+          orientation: tuple[float, float, float, float]) -> tuple[float, tuple[int, int] | None]:
+    """How far ``carried`` falls straight down from ``position`` before it touches another body (down
+    to the floor level, z = 0), and the (body, link) it then rests on (None: the floor level)."""
+    lo, hi = p.getAABB(carried, -1, physicsClientId=client)
+    below = {b for b, _ in p.getOverlappingObjects((lo[0], lo[1], 0.0), hi, physicsClientId=client) or ()}
+    below.discard(carried)
+
+    def touching(drop: float) -> list[tuple[int, int]]:
+        p.resetBasePositionAndOrientation(carried, (position[0], position[1], position[2] - drop), orientation,
+                                          physicsClientId=client)
+        return [(point[2], point[4]) for other in sorted(below)
+                for point in p.getClosestPoints(carried, other, FALL_TOLERANCE_M, physicsClientId=client)]
+
+    floor = max(0.0, lo[2])
+    free, drop = 0.0, None
+    for step in np.arange(FALL_STEP_M, floor + FALL_STEP_M, FALL_STEP_M):
+        if touching(min(float(step), floor)):
+            drop = min(float(step), floor)
+            break
+        free = min(float(step), floor)
+    if drop is None:
+        return floor, None
+    while drop - free > FALL_TOLERANCE_M:
+        middle = (free + drop) / 2
+        if touching(middle):
+            drop = middle
+        else:
+            free = middle
+    supports = touching(free + FALL_TOLERANCE_M)
+    return free, supports[0] if supports else None

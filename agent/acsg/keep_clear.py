@@ -8,6 +8,8 @@ keep away from.
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 import numpy as np
 
 from agent.perception.directions import GeometryError
@@ -23,25 +25,28 @@ LANE_HALF_WIDTH_M = 0.15
 OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
 
 
-def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray) -> list[np.ndarray]:
+def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
+               done_with: Collection[int] = ()) -> list[np.ndarray]:
     """Point sets (each (N, 3)) of the space every remembered door and drawer with a handle sweeps as
     the skills open it (`DEFAULT_AMOUNT`), and of the lanes its handle is reached along, shut and
     open (a door is closed again from where it stands open): from the handle straight out of the
     front towards the robot at ``robot_xy``, `LANE_HALF_WIDTH_M` to either side. ``eye``: where the
     parts were seen from (it orients their fronts). A part whose geometry cannot be read is left
-    out.
+    out, and so are the parts ``done_with``: opened and shut again, never to be reached for again,
+    their space is the table's like the rest.
 
     Args:
         memory: the remembered instances.
         eye: where the parts were seen from.
         robot_xy: where the robot stands.
+        done_with: the memory ids of parts that will not be opened again.
 
     Returns:
         The point sets.
     """
     kept = []
     for handle in memory.with_label("handle"):
-        if handle.parent is None:
+        if handle.parent is None or memory.get(handle.parent).id in done_with:
             continue
         part = memory.get(handle.parent)
         try:

@@ -14,18 +14,22 @@ from skills.arm.skill_plan import SkillPlanError
 
 #: How far the hand reaches from the TCP across its axis (half its span along the fingers).
 HAND_RADIUS_M = 0.11
+#: How far below an object's top the hand reaches putting it down (fingers closed around it).
+HAND_DIP_M = 0.03
 
 
 def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
               near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
-              hand_radius_m: float = HAND_RADIUS_M,
+              hand_radius_m: float = HAND_RADIUS_M, height: float | None = None,
               allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed"
               ) -> np.ndarray:
     """A free place on a surface to put an object down: RoboEXP's idle space.
 
     Points standing above the surface's top (by more than 5 mm) must stay ``margin_m`` beyond the
-    object's ``radius`` or the hand's reach around its TCP (``hand_radius_m``), whichever is more,
-    away in the plane; the spot keeps ``radius`` + ``margin_m`` inside the top's seen extent.
+    object's ``radius`` away in the plane; those that stand up to where the hand works, at the
+    object's top (less `HAND_DIP_M`: fingers closed around it reach that far down), must stay
+    ``margin_m`` beyond the hand's reach around its TCP (``hand_radius_m``) too. The spot keeps
+    ``radius`` + ``margin_m`` inside the top's seen extent.
 
     Args:
         surface_points: (N, 3) the surface's points (a table's, from the memory); its top is their
@@ -37,6 +41,7 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
         margin_m: room kept around the object or the hand.
         grid_m: the spacing of the candidate places.
         hand_radius_m: how far the hand reaches from the TCP across its axis.
+        height: the object's height (m); None: every point standing up counts for the hand.
         allowed: which of an (N, 2) array of places the caller may use (a boolean mask: within
             the arm's reach, say, from `reach_along`: the nearest free place to ``near`` may lie at
             the table's far side, beyond what the arm can carry to); None: all.
@@ -55,6 +60,7 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     flat = points[points[:, 2] >= top - 0.015, :2]
     keep = radius + margin_m
     clear = max(radius, hand_radius_m) + margin_m
+    hand_from = top + 0.005 if height is None else top + max(0.005, height - HAND_DIP_M)
     lo, hi = flat.min(axis=0) + keep, flat.max(axis=0) - keep
     if np.any(lo > hi):
         size = np.round(flat.max(axis=0) - flat.min(axis=0), 2).tolist()
@@ -63,12 +69,12 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     candidates = np.array([(x, y) for x in xs for y in ys])
     on_top, _ = cKDTree(flat).query(candidates, distance_upper_bound=grid_m)
     candidates = candidates[np.isfinite(on_top)]
-    standing = [np.asarray(o, dtype=float) for o in obstacle_points if len(o)]
-    standing = [o[o[:, 2] > top + 0.005, :2] for o in standing]
-    standing = [o for o in standing if len(o)]
-    if standing and len(candidates):
-        gap, _ = cKDTree(np.vstack(standing)).query(candidates)
-        candidates = candidates[gap >= clear]
+    standing = np.vstack([np.zeros((0, 3)), *(np.asarray(o, dtype=float) for o in obstacle_points if len(o))])
+    for low, need in ((top + 0.005, keep), (hand_from, clear)):
+        up = standing[standing[:, 2] > low, :2]
+        if len(up) and len(candidates):
+            gap, _ = cKDTree(up).query(candidates)
+            candidates = candidates[gap >= need]
     if allowed is not None and len(candidates):
         candidates = candidates[np.asarray(allowed(candidates), dtype=bool)]
     if not len(candidates):

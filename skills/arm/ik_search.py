@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -150,13 +150,20 @@ class IKSearch:
             raise SkillPlanError(f"IK: {what} unreachable: {result.reason}")
         return result.q
 
-    def chain(self, stages: list[tuple[str, str, Any]]) -> list[np.ndarray]:
+    def chain(self, stages: list[tuple[str, str, Any]], check: PostureCheck | None = None) -> list[np.ndarray]:
         """Joint waypoints for stages run one after the other from where the arm is.
+
+        With ``check``, the postures of the first stage are tried in turn (`solutions`) until one
+        from which the joint-space move there and every waypoint of every stage pass it; when
+        none does, the first posture's chain is given, as without a check. A later "free" stage
+        takes the first of its postures that passes.
 
         Args:
             stages: (what, kind, target) each: kind "free" an IK solution for the pose ``target``
                 (a one-row array), "line" a straight TCP line from the previous stage's pose to
                 ``target``, "path" the TCP through the poses ``target``.
+            check: what each stage's postures must pass: called with the stage's ``what`` and a
+                joint vector, it returns a problem in words or None.
 
         Returns:
             Each stage's waypoints, in order.
@@ -164,21 +171,87 @@ class IKSearch:
         Raises:
             SkillPlanError: naming the first stage that cannot be reached.
         """
+        if check is None or not stages or stages[0][1] != "free":
+            return self._chain_from(self.here, None, stages, None)
+        what, _, target = stages[0]
+        fallback: list[np.ndarray] | None = None
+        for q in self.solutions(target, what):
+            chains = [q[None, :], *self._chain_from(q, target, stages[1:], check)]
+            if _failed(chains):
+                continue
+            fallback = fallback or chains
+            if _first_problem(check, what, _joint_line(self.here, q)) is None \
+                    and _chains_problem(check, stages, chains) is None:
+                return chains
+        return fallback or self._chain_from(self.here, None, stages, None)  # raises, naming the stage
+
+    def _chain_from(self, q: np.ndarray, pose: np.ndarray | None, stages: list[tuple[str, str, Any]],
+                    check: PostureCheck | None) -> list[np.ndarray]:
+        """The stages' waypoints from ``q`` (the TCP at ``pose``); with ``check``, a stage that cannot
+        be reached ends the list early with an empty array rather than raising."""
         kin = self.arm.kin
         chains: list[np.ndarray] = []
-        q = self.here
-        pose = None
         for what, kind, target in stages:
-            if kind == "free":
-                q = self.ik(target, what, seed=None if pose is None else q)
-                chains.append(q[None, :])
-                pose = target
-            elif kind == "line":
-                assert pose is not None
-                current = self.base @ kin.forward(q)
-                chains.append(self.path(q, line_poses(current, target, LINE_STEP_M), what))
-                q, pose = chains[-1][-1], target
-            else:
-                chains.append(self.path(q, list(target), what))
-                q, pose = chains[-1][-1], target[-1]
+            try:
+                if kind == "free":
+                    q = self._free(target, what, None if pose is None else q, check)
+                    chains.append(q[None, :])
+                    pose = target
+                elif kind == "line":
+                    assert pose is not None
+                    current = self.base @ kin.forward(q)
+                    chains.append(self.path(q, line_poses(current, target, LINE_STEP_M), what))
+                    q, pose = chains[-1][-1], target
+                else:
+                    chains.append(self.path(q, list(target), what))
+                    q, pose = chains[-1][-1], target[-1]
+            except SkillPlanError:
+                if check is None:
+                    raise
+                chains.append(np.zeros((0, len(q))))
+                return chains
         return chains
+
+    def _free(self, target: np.ndarray, what: str, seed: np.ndarray | None, check: PostureCheck | None) -> np.ndarray:
+        """The first posture reaching ``target`` that passes ``check`` (the first at all without one,
+        or when none does)."""
+        if check is None:
+            return self.ik(target, what, seed=seed)
+        first = None
+        for q in self.solutions(target, what, seed):
+            first = q if first is None else first
+            if check(what, q) is None:
+                return q
+        assert first is not None
+        return first
+
+
+#: What a chain's postures must pass: (stage, joint positions) -> a problem in words, or None.
+PostureCheck = Callable[[str, np.ndarray], "str | None"]
+#: Joint positions a straight joint-space move is checked at.
+JOINT_LINE_SAMPLES = 12
+
+
+def _failed(chains: list[np.ndarray]) -> bool:
+    return any(len(chain) == 0 for chain in chains)
+
+
+def _joint_line(start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Joint positions along the straight joint-space move from ``start`` to ``end``."""
+    return start + np.outer(np.linspace(0.0, 1.0, JOINT_LINE_SAMPLES), end - start)
+
+
+def _first_problem(check: PostureCheck, what: str, waypoints: np.ndarray) -> str | None:
+    for q in waypoints:
+        problem = check(what, q)
+        if problem is not None:
+            return f"{what}: {problem}"
+    return None
+
+
+def _chains_problem(check: PostureCheck, stages: list[tuple[str, str, Any]], chains: list[np.ndarray]) -> str | None:
+    for (what, _, _), waypoints in zip(stages, chains):
+        problem = _first_problem(check, what, waypoints[::2] if len(waypoints) > 2 else waypoints)
+        if problem is not None:
+            return problem
+    return None

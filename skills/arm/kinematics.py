@@ -106,7 +106,8 @@ class ArmKinematics:
         self.model = reduced_model(full, self.joint_names, dict(fixed or {}))
         self.data = self.model.createData()
         self._frame = self.model.getFrameId(tcp_frame)
-        self._q_index = np.array([self.model.idx_qs[self.model.getJointId(n)] for n in self.joint_names])
+        self._joint_ids = [self.model.getJointId(n) for n in self.joint_names]
+        self._q_index = np.array([self.model.idx_qs[j] for j in self._joint_ids])
         self._v_index = np.array([self.model.idx_vs[self.model.getJointId(n)] for n in self.joint_names])
         self._qm = pin.neutral(self.model)
         self.lower = self.model.lowerPositionLimit[self._q_index].copy()
@@ -182,6 +183,18 @@ class ArmKinematics:
         """
         pin.framesForwardKinematics(self.model, self.data, self._model_q(q))
         return self.data.oMf[self._frame].homogeneous.copy()
+
+    def joint_origins(self, q: np.ndarray) -> np.ndarray:
+        """Where each controlled joint's axis sits: the arm's skeleton, for clearance checks.
+
+        Args:
+            q: (dof,) joint positions.
+
+        Returns:
+            (dof, 3) the origins of the joints' frames in the root frame, in the order of ``joints``.
+        """
+        pin.forwardKinematics(self.model, self.data, self._model_q(q))
+        return np.array([self.data.oMi[j].translation for j in self._joint_ids])
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """How the TCP moves with the joints.

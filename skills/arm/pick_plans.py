@@ -19,10 +19,11 @@ import numpy as np
 
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
-from skills.arm.frames import pose_at, shifted
+from skills.arm.clearance import Carried, Clearance
+from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import searched
 from skills.arm.grasps import UP, hand_touches, object_grasps
-from skills.arm.ik_search import IKSearch
+from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
 
@@ -35,6 +36,8 @@ STRADDLE_CLEARANCE_M = 0.008
 #: the top of a 20 cm milk carton put down near the base, which stopped the pick back (occlusion
 #: 1000 of tuning-wide).
 HIGH_ABOVE_M = 0.12
+#: The stages of a pick in which the hand carries the object.
+_CARRYING = frozenset({"lift", "carry", "lower"})
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -74,7 +77,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
-    builder = PlanBuilder(arm, here, base_pose, surface_z)
+    clearance = Clearance(arm, base_transform(base_pose), surface_z, keep_off)
+    builder = PlanBuilder(arm, here, base_pose, surface_z, clearance)
     failures: list[str] = []
     ways = []
     for way in object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth):
@@ -87,8 +91,13 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         down = "down onto the object's top" if way.touch else "down onto the object"
         rest = [(down, "line", grasp), ("lift", "line", above_grasp), ("carry", "line", above_release),
                 ("lower", "line", release), ("back up", "line", above_release)]
+        carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
+
+        def check(what: str, posture: np.ndarray) -> str | None:
+            return clearance.problem(posture, carried if what in _CARRYING else None)
+
         try:
-            chains = _chain_from_above(ik, above_grasp, rest, keep_off)
+            chains = _chain_from_above(ik, above_grasp, rest, keep_off, check)
             come, chain = chains[:-len(rest)], chains[-len(rest):]
             descent = searched(ik, chain[0], grasp, down) if way.touch else chain[0]
         except SkillPlanError as error:
@@ -112,16 +121,17 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
 
 
 def _chain_from_above(ik: IKSearch, above: np.ndarray, rest: list[tuple[str, str, Any]],
-                      keep_off: np.ndarray | None) -> list[np.ndarray]:
+                      keep_off: np.ndarray | None, check: PostureCheck) -> list[np.ndarray]:
     """The pick's chain, coming to the pose ``above`` the object from `HIGH_ABOVE_M` higher,
-    straight down, where `_open_above`; else, or where that is out of reach, straight to it."""
+    straight down, where `_open_above`; else, or where that is out of reach, straight to it. Each
+    tries the arm's postures for the clear one (`IKSearch.chain`)."""
     if _open_above(above, keep_off):
         try:
             return ik.chain([("high above the object", "free", shifted(above, HIGH_ABOVE_M * UP)),
-                             ("above the object", "line", above), *rest])
+                             ("above the object", "line", above), *rest], check)
         except SkillPlanError:
             pass  # out of reach up there: as before
-    return ik.chain([("above the object", "free", above), *rest])
+    return ik.chain([("above the object", "free", above), *rest], check)
 
 
 def _open_above(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:

@@ -12,6 +12,7 @@ import numpy as np
 
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
+from skills.arm.clearance import Clearance
 from skills.arm.frames import base_transform
 from skills.arm.grasps import HandleGrasp, ObjectGrasp, hand_bottom
 from skills.arm.ik_search import IKSearch
@@ -34,11 +35,15 @@ class PlanBuilder:
         base_pose: where the base stands.
         surface_z: the top of the surface the hand works over (world z), which free moves keep
             the hand above; None for none.
+        clearance: what the whole arm keeps clear of (`skills.arm.clearance.Clearance`): free
+            moves take the first of their routes that does; None for no such check.
     """
 
-    def __init__(self, arm: ArmModel, start: np.ndarray, base_pose: Pose2D, surface_z: float | None = None) -> None:
+    def __init__(self, arm: ArmModel, start: np.ndarray, base_pose: Pose2D, surface_z: float | None = None,
+                 clearance: Clearance | None = None) -> None:
         self.arm = arm
         self.surface_z = surface_z
+        self.clearance = clearance
         self.start = start
         #: Where the plan has the arm: the end of the last move.
         self.q = start.copy()
@@ -143,16 +148,23 @@ class PlanBuilder:
                 routes.append(np.array([*start, *over, *end]))
         target = self.base @ arm.kin.forward(goal)
         low = math.inf
+        above: Step | None = None  # the first route that keeps the hand above the surface
         for waypoints in routes:
             step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
             low = self.lowest(step)
-            if self.surface_z is None or low >= self.surface_z + SURFACE_CLEARANCE_M:
-                self.steps.append(step)
-                self.q = goal.copy()
-                return
-        raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
-                             f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
-                             f"at {self.surface_z:.3f} m, even with the lift up")
+            if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
+                continue
+            above = above or step
+            if self.clearance is None or self.clearance.path_problem(step.samples, every=3) is None:
+                above = step
+                break
+        if above is None:
+            assert self.surface_z is not None
+            raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
+                                 f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
+                                 f"at {self.surface_z:.3f} m, even with the lift up")
+        self.steps.append(above)
+        self.q = goal.copy()
 
     def lowest(self, step: Step) -> float:
         """How low the hand comes over a move, to keep it above a surface.

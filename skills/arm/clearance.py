@@ -1,0 +1,164 @@
+"""The whole arm kept clear of a table, of what stands near and of what the hand carries.
+
+A plan's grasps check the hand and its fingers (`skills.arm.grasps.HAND_BOXES`) where they work;
+the rest of the arm, from the shoulder to the wrist, moves wherever IK and joint-space moves take
+it. Lowering a box close before the robot took the elbow down onto the table, which held the
+arm back 13 cm short of where the box was to go; a free move into a cabinet swept the forearm
+through the door standing open beside it and pushed it shut. `Clearance` says, for one posture,
+what the links would touch: the links are spheres strung along the segments between the origins
+of successive revolute joints (`LINK_RADIUS_M` round: the Panda's links are ~12 cm thick), the
+table is the surface the plan works over, what stands near is the memory's points, and what the
+hand carries is a box fixed to the TCP. The segment from the last joint to the TCP is the hand's,
+left to its boxes.
+
+Pure: an `ArmModel`, the base's pose and points in, a reason or None out.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from skills.arm.arm_model import ArmModel
+
+#: The links' radius around their skeleton (m).
+LINK_RADIUS_M = 0.065
+#: The spacing of the spheres along each segment (m).
+SPHERE_STEP_M = 0.04
+#: How far (m) the links keep above a surface, from other points and from what the hand carries.
+CLEARANCE_M = 0.01
+#: Points of what stands near within reach of a link that count as touching it: a voxel or two is
+#: the memory's noise.
+TOUCHING_POINTS = 3
+
+
+def link_spheres(origins: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarray:
+    """Sphere centres along the segments between successive joint origins.
+
+    Args:
+        origins: (k, 3) joint origins along the chain, shoulder first.
+        step_m: the most the centres lie apart along a segment.
+
+    Returns:
+        (M, 3) centres: each origin, and points between successive ones.
+    """
+    origins = np.asarray(origins, dtype=float)
+    centres = [origins[:1]]
+    for start, end in zip(origins[:-1], origins[1:]):
+        count = max(1, math.ceil(float(np.linalg.norm(end - start)) / step_m))
+        centres.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
+    return np.vstack(centres)
+
+
+@dataclass(frozen=True)
+class Carried:
+    """What the hand holds, as a box fixed to the TCP: its corners ``lo`` and ``hi`` in the TCP's frame."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @classmethod
+    def held_at(cls, tcp_pose: np.ndarray, centre: np.ndarray, extent: np.ndarray) -> Carried:
+        """The box of a thing standing upright with its middle at ``centre``, grasped with the TCP at
+        ``tcp_pose``.
+
+        Args:
+            tcp_pose: the TCP's 4×4 world pose at the grasp.
+            centre: the thing's middle (world).
+            extent: its box (dx, dy, dz), world-aligned.
+
+        Returns:
+            The box in the TCP's frame.
+        """
+        half = np.asarray(extent, dtype=float) / 2
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half + centre
+        local = (corners - tcp_pose[:3, 3]) @ tcp_pose[:3, :3]
+        return cls(local.min(axis=0), local.max(axis=0))
+
+
+class Clearance:
+    """What one plan's arm must keep clear of, from a base standing at ``base``.
+
+    Args:
+        arm: the arm planned for.
+        base: the base's 4×4 world pose.
+        surface_z: the top of the surface the arm works over (world z), or None.
+        obstacles: (N, 3) world points of what stands near, or None.
+        radius_m: the links' radius.
+        clearance_m: how far the links keep from all of it.
+    """
+
+    def __init__(self, arm: ArmModel, base: np.ndarray, surface_z: float | None = None,
+                 obstacles: np.ndarray | None = None, radius_m: float = LINK_RADIUS_M,
+                 clearance_m: float = CLEARANCE_M) -> None:
+        self.arm = arm
+        self.base = base
+        self.surface_z = surface_z
+        points = None if obstacles is None else np.asarray(obstacles, dtype=float).reshape(-1, 3)
+        self.tree = cKDTree(points) if points is not None and len(points) else None
+        self.radius = radius_m
+        self.clearance = clearance_m
+        first = 0 if arm.lift_index is None else arm.lift_index + 1
+        self._chain = slice(first, None)  # the revolute joints: the lift's origin sits in the base
+
+    def spheres(self, q: np.ndarray) -> np.ndarray:
+        """The links' sphere centres (world) for joint positions ``q``.
+
+        Args:
+            q: (dof,) joint positions.
+
+        Returns:
+            (M, 3) centres.
+        """
+        origins = self.arm.kin.joint_origins(q)[self._chain]
+        return link_spheres(origins @ self.base[:3, :3].T + self.base[:3, 3])
+
+    def problem(self, q: np.ndarray, carried: Carried | None = None) -> str | None:
+        """What the links would touch with the arm at ``q``, in words; None when nothing.
+
+        Args:
+            q: (dof,) joint positions.
+            carried: what the hand holds, or None.
+
+        Returns:
+            The reason, or None.
+        """
+        centres = self.spheres(q)
+        reach = self.radius + self.clearance
+        if self.surface_z is not None:
+            off_body = np.hypot(*(centres[:, :2] - self.base[:2, 3]).T) > self.arm.body_radius
+            low = float(centres[off_body, 2].min(initial=math.inf)) - self.radius
+            if low < self.surface_z + self.clearance:
+                return f"the arm's links would come down to {low:.3f} m, onto the surface at {self.surface_z:.3f} m"
+        if self.tree is not None:
+            touching = len(set().union(*self.tree.query_ball_point(centres, reach)))
+            if touching >= TOUCHING_POINTS:
+                return f"the arm's links would touch what stands near ({touching} points)"
+        if carried is not None:
+            tcp = self.base @ self.arm.kin.forward(q)
+            local = (centres - tcp[:3, 3]) @ tcp[:3, :3]
+            gap = np.linalg.norm(np.maximum(np.maximum(carried.lo - local, local - carried.hi), 0.0), axis=1)
+            if float(gap.min()) < reach:
+                return "the arm's links would touch what the hand carries"
+        return None
+
+    def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1) -> str | None:
+        """The first problem along joint waypoints (every ``every``-th, and the last).
+
+        Args:
+            waypoints: (n, dof) joint positions.
+            carried: what the hand holds along them, or None.
+            every: how many waypoints apart the checks are.
+
+        Returns:
+            The reason, or None.
+        """
+        waypoints = np.atleast_2d(waypoints)
+        for k in np.unique(np.r_[np.arange(0, len(waypoints), every), len(waypoints) - 1]):
+            problem = self.problem(waypoints[k], carried)
+            if problem is not None:
+                return problem
+        return None

@@ -1,0 +1,39 @@
+"""Where nothing is put down on a table: the sweeps of its doors and drawers and the lanes to their
+handles (`agent.acsg.keep_clear`), read off a memory of a rendered drawer chest."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from agent.acsg.keep_clear import kept_clear
+from agent.perception.memory import InstanceMemory
+from test_perception_scene import INTRINSICS, Box, Front, look_at, render, storage
+
+EYE = np.array([0.0, -0.8, 1.45])
+
+
+def _chest_memory() -> InstanceMemory:
+    chest = storage(10, "drawer chest", (-0.2, 0.2), (0.23, 0.53), (0.75, 1.1),
+                    (Front("drawer", (-0.198, 0.198), (0.77, 0.93)), Front("drawer", (-0.198, 0.198), (0.932, 1.08))))
+    table = Box.at(1, "table", (0.0, 0.1, 0.73), (1.6, 0.9, 0.04))
+    memory = InstanceMemory()
+    pose = look_at(EYE, (0.0, 0.3, 0.9))
+    depth, seg, labels = render([table, *chest], pose)
+    memory.integrate_frame(depth, seg, labels, INTRINSICS, pose)
+    return memory
+
+
+def test_the_space_of_a_part_done_with_is_the_table_s_again() -> None:
+    memory = _chest_memory()
+    drawers = sorted((inst for inst in memory.with_label("drawer")), key=lambda inst: inst.centroid[2])
+    assert len(drawers) == 2
+    robot = np.array([0.0, -0.9])
+    every = np.vstack(kept_clear(memory, EYE, robot))
+    # a drawer sweeps out towards the robot, and its lane runs on to the robot
+    assert every[:, 1].min() < 0.0 and every[:, 1].max() > 0.2
+    lower_done = np.vstack(kept_clear(memory, EYE, robot, done_with={drawers[0].id}))
+    both_done = kept_clear(memory, EYE, robot, done_with={d.id for d in drawers})
+    assert 0 < len(lower_done) < len(every)
+    assert both_done == []
+    # what is left is the upper drawer's: its sweep and lane stand at its height, above the lower's top
+    assert lower_done[:, 2].min() > 0.93 - 0.05
