@@ -135,3 +135,11 @@ def test_a_wide_box_is_put_down_where_a_door_already_shut_again_swung() -> None:
     row = run_robot("recursive", 1004)
     assert row["failed_actions"] == []
     assert row["success"] and row["state_recovered"]
+
+
+def test_the_way_to_a_thing_put_down_keeps_the_hand_off_it_and_its_neighbours() -> None:
+    # occlusion 1019 (tuning-wide): the free move to high above a milk carton put down by the
+    # table's edge swept a finger across the carton itself, and the carton was never put back.
+    row = run_robot("occlusion", 1019)
+    assert row["failed_actions"] == []
+    assert row["success"] and row["state_recovered"]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from skills.arm.arm_model import READY
-from skills.arm.clearance import LINK_RADIUS_M, Carried, Clearance, link_spheres
+from skills.arm.clearance import LINK_RADIUS_M, Carried, Clearance, box_points, link_spheres
 from skills.arm.frames import base_transform
 from skills.arm.planner import ArmPlanner
 from worlds.robot import CameraConfig
@@ -64,3 +64,20 @@ def test_a_carried_box_reaching_up_to_the_forearm_is_touched(planner: ArmPlanner
     wrist = clearance.spheres(q)[-1]
     tall = Carried.held_at(tcp, (tcp[:3, 3] + wrist) / 2, np.abs(wrist - tcp[:3, 3]) + 0.1)
     assert clearance.problem(q, tall) == "the arm's links would touch what the hand carries"
+
+
+def test_the_hand_counts_only_on_the_way_to_a_grasp(planner: ArmPlanner) -> None:
+    q = np.array(READY)
+    tcp = base_transform(BASE) @ planner.kin.forward(q)
+    finger = tcp[:3, 3] + tcp[:3, 1] * 0.05  # beside the TCP, where an open finger is
+    points = finger + np.array([[0.0, 0.0, 0.0], [0.003, 0.0, 0.0], [0.0, 0.0, 0.003]])
+    clearance = Clearance(planner, base_transform(BASE), obstacles=points)
+    assert clearance.problem(q) is None
+    assert clearance.problem(q, hand=True) == "the hand would touch what stands near"
+
+
+def test_a_box_is_filled_with_points_out_to_its_corners() -> None:
+    points = box_points(np.array([0.0, 0.0, 0.5]), np.array([0.1, 0.05, 0.2]))
+    assert points.min(axis=0) == pytest.approx([-0.05, -0.025, 0.4])
+    assert points.max(axis=0) == pytest.approx([0.05, 0.025, 0.6])
+    assert len(np.unique(points[:, 2])) >= 11  # 2 cm apart at most

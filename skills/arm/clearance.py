@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from skills.arm.arm_model import ArmModel
+from skills.arm.grasps import hand_touches
 
 #: The links' radius around their skeleton (m).
 LINK_RADIUS_M = 0.065
@@ -30,6 +31,8 @@ LINK_RADIUS_M = 0.065
 SPHERE_STEP_M = 0.04
 #: How far (m) the links keep above a surface, from other points and from what the hand carries.
 CLEARANCE_M = 0.01
+#: How far from the TCP (m) the hand and its open fingers reach at most.
+HAND_REACH_M = 0.25
 #: Points of what stands near within reach of a link that count as touching it: a voxel or two is
 #: the memory's noise.
 TOUCHING_POINTS = 3
@@ -51,6 +54,21 @@ def link_spheres(origins: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarr
         count = max(1, math.ceil(float(np.linalg.norm(end - start)) / step_m))
         centres.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
     return np.vstack(centres)
+
+
+def box_points(centre: np.ndarray, extent: np.ndarray, step_m: float = 0.02) -> np.ndarray:
+    """Points filling a world-aligned box, to stand for a thing known only by its box.
+
+    Args:
+        centre: the box's middle (world).
+        extent: its size (dx, dy, dz).
+        step_m: the most the points lie apart along each axis.
+
+    Returns:
+        (N, 3) points, the corners among them.
+    """
+    axes = [np.linspace(c - e / 2, c + e / 2, max(2, math.ceil(e / step_m) + 1)) for c, e in zip(centre, extent)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
 @dataclass(frozen=True)
@@ -116,12 +134,14 @@ class Clearance:
         origins = self.arm.kin.joint_origins(q)[self._chain]
         return link_spheres(origins @ self.base[:3, :3].T + self.base[:3, 3])
 
-    def problem(self, q: np.ndarray, carried: Carried | None = None) -> str | None:
+    def problem(self, q: np.ndarray, carried: Carried | None = None, hand: bool = False) -> str | None:
         """What the links would touch with the arm at ``q``, in words; None when nothing.
 
         Args:
             q: (dof,) joint positions.
             carried: what the hand holds, or None.
+            hand: whether the hand and its open fingers count too (`skills.arm.grasps.HAND_BOXES`):
+                on the way to a grasp, not at it.
 
         Returns:
             The reason, or None.
@@ -137,6 +157,11 @@ class Clearance:
             touching = len(set().union(*self.tree.query_ball_point(centres, reach)))
             if touching >= TOUCHING_POINTS:
                 return f"the arm's links would touch what stands near ({touching} points)"
+        if hand and self.tree is not None:
+            tcp = self.base @ self.arm.kin.forward(q)
+            near = self.tree.query_ball_point(tcp[:3, 3], HAND_REACH_M)
+            if near and hand_touches(tcp, self.tree.data[near], self.clearance) >= TOUCHING_POINTS:
+                return "the hand would touch what stands near"
         if carried is not None:
             tcp = self.base @ self.arm.kin.forward(q)
             local = (centres - tcp[:3, 3]) @ tcp[:3, :3]
@@ -145,20 +170,22 @@ class Clearance:
                 return "the arm's links would touch what the hand carries"
         return None
 
-    def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1) -> str | None:
+    def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1,
+                     hand: bool = False) -> str | None:
         """The first problem along joint waypoints (every ``every``-th, and the last).
 
         Args:
             waypoints: (n, dof) joint positions.
             carried: what the hand holds along them, or None.
             every: how many waypoints apart the checks are.
+            hand: whether the hand counts too (see `problem`).
 
         Returns:
             The reason, or None.
         """
         waypoints = np.atleast_2d(waypoints)
         for k in np.unique(np.r_[np.arange(0, len(waypoints), every), len(waypoints) - 1]):
-            problem = self.problem(waypoints[k], carried)
+            problem = self.problem(waypoints[k], carried, hand)
             if problem is not None:
                 return problem
         return None

@@ -19,7 +19,7 @@ import numpy as np
 
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
-from skills.arm.clearance import Carried, Clearance
+from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import searched
 from skills.arm.grasps import UP, hand_touches, object_grasps
@@ -36,8 +36,9 @@ STRADDLE_CLEARANCE_M = 0.008
 #: the top of a 20 cm milk carton put down near the base, which stopped the pick back (occlusion
 #: 1000 of tuning-wide).
 HIGH_ABOVE_M = 0.12
-#: The stages of a pick in which the hand carries the object.
+#: The stages of a pick in which the hand carries the object, and those on the way to it.
 _CARRYING = frozenset({"lift", "carry", "lower"})
+_COMING = frozenset({"high above the object", "above the object"})
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -77,8 +78,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
-    clearance = Clearance(arm, base_transform(base_pose), surface_z, keep_off)
-    builder = PlanBuilder(arm, here, base_pose, surface_z, clearance)
+    near = np.zeros((0, 3)) if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    clearance = Clearance(arm, base_transform(base_pose), surface_z, near)
+    # On the way to it, the object is in the way too: a finger swept across a carton's top.
+    around = Clearance(arm, base_transform(base_pose), surface_z,
+                       np.vstack([near, box_points(top - size[2] / 2 * UP, size)]))
+    builder = PlanBuilder(arm, here, base_pose, surface_z, around)
     failures: list[str] = []
     ways = []
     for way in object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth):
@@ -94,6 +99,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
 
         def check(what: str, posture: np.ndarray) -> str | None:
+            if what in _COMING:
+                return around.problem(posture, hand=True)
             return clearance.problem(posture, carried if what in _CARRYING else None)
 
         try:

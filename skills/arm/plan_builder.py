@@ -155,7 +155,7 @@ class PlanBuilder:
             if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
                 continue
             above = above or step
-            if self.clearance is None or self.clearance.path_problem(step.samples, every=3) is None:
+            if self.clearance is None or self.clearance.path_problem(step.samples, every=3, hand=True) is None:
                 above = step
                 break
         if above is None:
