@@ -124,7 +124,7 @@ class _Pick(ArmSkill):
         input_port("object_point", np.ndarray, "the object's top-down grasp point (x, y, z)"),
         input_port("object_extent", np.ndarray, "the extent of its points (dx, dy, dz)"),
         input_port("place_point", np.ndarray, "where the grasp point is to be once the object stands at its "
-                   "destination (x, y, z)"),
+                   "destination (x, y, z); or (k, 3) such places, the first a clear way reaches taken"),
         input_port("keep_off", np.ndarray, "points (N, 3) of what stands near, neither the object nor what it "
                    "stands on, which the hand is to keep off", default=None),
     )

@@ -32,6 +32,11 @@ from skills.robot_parts import DoorsAndDrawers
 #: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
 #: the evaluation's tolerance for a thing put back.
 BACK_M = 0.02
+#: A thing whose top the memory has this far across (m) from where it was put down has moved since.
+MOVED_M = 0.03
+#: Idle spots offered to a pick away, nearest first, and how far apart they lie at least (m): where
+#: the way to the nearest is blocked (a door standing open across it), the next may be clear.
+PLACES, PLACES_APART_M = 3, 0.15
 #: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
 #: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
 #: along the table's edge to a stand from which both lie within this.
@@ -108,20 +113,24 @@ class Picks:
 
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with())
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
+        options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
         try:  # beyond the strip the arm works over from the robot's stands; else in it
-            spot = idle_spot(surface.points(), obstacles, radius, near, height=float(extent[2]), allowed=beyond_strip,
-                             allowed_means="within the arm's reach beyond the strip before the robot")
+            spots = idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
+                              allowed_means="within the arm's reach beyond the strip before the robot", **options)
         except SkillPlanError:
-            spot = idle_spot(surface.points(), obstacles, radius, near, height=float(extent[2]), allowed=reachable,
-                             allowed_means="within the arm's reach")
-        (place_lo,), (place_hi,) = reach_along(spot[:2], edge_y, PLACE_REACH_M)
+            spots = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+                              allowed_means="within the arm's reach", **options)
+        (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
+        lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
+        spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
         self.drive(Pose2D(stand_x, edge_y, body.home.yaw))
-        place = np.array([spot[0], spot[1], spot[2] + top[2] - box[0][2]])
-        result = body.run("pick_away", object_point=top, object_extent=extent, place_point=place,
-                          surface_z=float(spot[2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
+        places = spots + np.array([0.0, 0.0, top[2] - box[0][2]])
+        result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
+                          surface_z=float(spots[0, 2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:
             return SkillResult(False, result.reason)
+        place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
@@ -157,11 +166,19 @@ class Picks:
         return self._back(obj) if result.ok else SkillResult(False, result.reason)
 
     def _put_back(self, obj: Instance, away: Away) -> ArmResult:
-        """One run of the pick-back skill from where the memory has ``obj`` now; the memory is told
-        where it went when it went there."""
+        """One run of the pick-back skill from where ``obj`` is now; the memory is told where it
+        went when it went there.
+
+        Where the memory has the thing's top within `MOVED_M` across of where it was put down,
+        it still stands there, and the hand goes to that very point (at the height seen): held
+        where it was held when it was put down, it goes back as it came. Seen anew from the
+        side it stands at there, a box's top moved 1.7 cm in the memory, and put back by that
+        top, the box came down onto the wall of the smaller one it had covered."""
         body = self.body
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
+        if float(np.linalg.norm(now[:2] - away.placed_point[:2])) <= MOVED_M:
+            now = np.array([*away.placed_point[:2], now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
                           label=f"{obj.label} {obj.id}", keep_off=self._near(obj))

@@ -114,6 +114,23 @@ class ACSG:
         self.add_edge(target, id)
         return node
 
+    def remove_action(self, action_id: str) -> None:
+        """Take an action out of the graph with its edges: one proposed and never run on a thing
+        found to be another already in the graph.
+
+        Args:
+            action_id: the action node's id.
+
+        Raises:
+            ACSGError: it is no action node.
+        """
+        self.action(action_id)
+        for source in list(self._in[action_id]):
+            self._out[source].pop(action_id, None)
+        for target in list(self._out[action_id]):
+            self._in[target].pop(action_id, None)
+        del self._nodes[action_id], self._out[action_id], self._in[action_id]
+
     def merge_objects(self, keep: str, other: str) -> None:
         """Declare the object ``other`` the same thing as ``keep``: its edges go over to ``keep``
         (those ``keep`` has already, or that would close a cycle, are dropped) and it leaves the graph.

@@ -207,19 +207,29 @@ class Explorer:
 
     def _fold_absorbed(self, detections: list[Detection]) -> None:
         """Fold the node of each instance the perception has found to be another one (``absorbed``)
-        into that one's: left in, the graph would keep a thing twice. A node something was done to
-        (an action on it, moved away) stays, with a note."""
+        into that one's: left in, the graph would keep a thing twice. Actions proposed on it and
+        never run go with it; a node something was done to (an action run on it, moved away)
+        stays, with a note."""
         for det in detections:
             for instance in det.hints.get("absorbed", ()):
                 other = object_id(instance)
                 if other == det.id or other not in self.graph or det.id not in self.graph:
                     continue
-                if other in self.moved_away or self.graph.successors(other, "object-action"):
+                actions = self.graph.successors(other, "object-action")
+                if other in self.moved_away or any(self.graph.action(a).state != "unexplored" for a in actions):
                     self.notes.append(f"{other} is {det.id}, but was acted on: both kept")
                     continue
+                for action in actions:
+                    self._forget_action(action)
                 self.graph.merge_objects(det.id, other)
                 self.unexplored.pop(other, None)
                 self.visible.pop(other, None)
+
+    def _forget_action(self, action_id: str) -> None:
+        """Take an action never run out of the graph, the stack and U."""
+        self.graph.remove_action(action_id)
+        self.stack = [entry for entry in self.stack if entry.action != action_id]
+        self.unexplored.pop(action_id, None)
 
     def _add_relations(self) -> None:
         waiting = []

@@ -140,9 +140,9 @@ class InstanceMemory:
             if not matches:
                 created.append(self._create(detection).id)
                 continue
-            target = self.instances[matches[0]]
+            target = self.instances[self._oldest_together(matches)]
             apart = []
-            for other in matches[1:]:
+            for other in (m for m in matches if m != target.id):
                 if self.instances[other].frames & (target.frames | {self.frame}):
                     apart.append(other)  # seen apart in one frame: two things, however close (stacked drawers)
                     continue
@@ -158,6 +158,15 @@ class InstanceMemory:
         attach_parts(self.instances, self.live(), seen, self._parents, self.config.part_gap_m)
         return FrameUpdate(self.frame, tuple(created), tuple(i for i in updated if i not in created),
                            shrunk, tuple(gone), absorbed)
+
+    def _oldest_together(self, matches: list[int]) -> int:
+        """Of the instances a detection matches, best first, the oldest one not seen apart from the
+        best (in one frame with it): the one the others are merged into, so that a thing keeps the
+        identity it was first known by (the box picked away, seen anew where it was put down, is
+        still that box and not a new one that absorbed it)."""
+        best = self.instances[matches[0]]
+        together = [m for m in matches if m == best.id or not self.instances[m].frames & (best.frames | {self.frame})]
+        return min(together, key=lambda m: self.instances[m].first_seen)
 
     def merge(self, keep: int, other: int) -> Instance:
         """Declare ``other`` the same thing as ``keep``, for callers who know what perception cannot

@@ -33,6 +33,8 @@ SPHERE_STEP_M = 0.04
 CLEARANCE_M = 0.01
 #: How far from the TCP (m) the hand and its open fingers reach at most.
 HAND_REACH_M = 0.25
+#: The bottom of what the hand carries that may touch what it stands on or is lifted off (m).
+SUPPORT_M = 0.02
 #: Points of what stands near within reach of a link that count as touching it: a voxel or two is
 #: the memory's noise.
 TOUCHING_POINTS = 3
@@ -56,6 +58,11 @@ def link_spheres(origins: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarr
     return np.vstack(centres)
 
 
+def _outside(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """How far each point lies outside the box ``lo``..``hi`` (0 inside)."""
+    return np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=1)
+
+
 def box_points(centre: np.ndarray, extent: np.ndarray, step_m: float = 0.02) -> np.ndarray:
     """Points filling a world-aligned box, to stand for a thing known only by its box.
 
@@ -73,10 +80,13 @@ def box_points(centre: np.ndarray, extent: np.ndarray, step_m: float = 0.02) -> 
 
 @dataclass(frozen=True)
 class Carried:
-    """What the hand holds, as a box fixed to the TCP: its corners ``lo`` and ``hi`` in the TCP's frame."""
+    """What the hand holds, as a box fixed to the TCP: its corners ``lo`` and ``hi`` relative to the
+    TCP, along the world's axes as they were when it was grasped with the TCP turned ``rotation``
+    (the box turns with the hand from there)."""
 
     lo: np.ndarray
     hi: np.ndarray
+    rotation: np.ndarray
 
     @classmethod
     def held_at(cls, tcp_pose: np.ndarray, centre: np.ndarray, extent: np.ndarray) -> Carried:
@@ -89,12 +99,40 @@ class Carried:
             extent: its box (dx, dy, dz), world-aligned.
 
         Returns:
-            The box in the TCP's frame.
+            The box, relative to the TCP.
         """
         half = np.asarray(extent, dtype=float) / 2
-        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half + centre
-        local = (corners - tcp_pose[:3, 3]) @ tcp_pose[:3, :3]
-        return cls(local.min(axis=0), local.max(axis=0))
+        offset = np.asarray(centre, dtype=float) - tcp_pose[:3, 3]
+        return cls(offset - half, offset + half, tcp_pose[:3, :3].copy())
+
+    def frame(self, tcp_pose: np.ndarray) -> np.ndarray:
+        """The box's own 4×4 frame with the TCP at ``tcp_pose``: its axes the world's as grasped,
+        turned as the hand has turned since, its origin at the TCP.
+
+        Args:
+            tcp_pose: the TCP's 4×4 world pose.
+
+        Returns:
+            The frame (world).
+        """
+        frame = np.eye(4)
+        frame[:3, :3] = tcp_pose[:3, :3] @ self.rotation.T
+        frame[:3, 3] = tcp_pose[:3, 3]
+        return frame
+
+    def world_corners(self, tcp_pose: np.ndarray) -> np.ndarray:
+        """The box's eight corners with the TCP at ``tcp_pose``.
+
+        Args:
+            tcp_pose: the TCP's 4×4 world pose.
+
+        Returns:
+            (8, 3) world points.
+        """
+        corners = np.array([[x, y, z] for x in (self.lo[0], self.hi[0]) for y in (self.lo[1], self.hi[1])
+                            for z in (self.lo[2], self.hi[2])])
+        frame = self.frame(tcp_pose)
+        return corners @ frame[:3, :3].T + frame[:3, 3]
 
 
 class Clearance:
@@ -164,10 +202,18 @@ class Clearance:
                 return "the hand would touch what stands near"
         if carried is not None:
             tcp = self.base @ self.arm.kin.forward(q)
-            local = (centres - tcp[:3, 3]) @ tcp[:3, :3]
-            gap = np.linalg.norm(np.maximum(np.maximum(carried.lo - local, local - carried.hi), 0.0), axis=1)
-            if float(gap.min()) < reach:
+            frame = carried.frame(tcp)
+            local = (centres - frame[:3, 3]) @ frame[:3, :3]
+            if float(_outside(local, carried.lo, carried.hi).min()) < reach:
                 return "the arm's links would touch what the hand carries"
+            if self.tree is not None:
+                corners = carried.world_corners(tcp)
+                lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
+                lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
+                middle, half = (lo + hi) / 2, (hi - lo) / 2
+                near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
+                if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:
+                    return "what the hand carries would touch what stands near"
         return None
 
     def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1,

@@ -19,7 +19,7 @@ object, closing across it) cannot:
   the directions the usual grasp would, best first; then, for a box whose middle is out of reach
   (a wide box at the table's far side: the hand above its middle fell 15 cm short), on the top
   just inside its near edge (`EDGE_INSET_M`), straight down and leaning back towards the robot
-  (`EDGE_PITCH`). The world carries what the fingers hold as it was held, so a box held by its
+  (`EDGE_PITCHES`). The world carries what the fingers hold as it was held, so a box held by its
   edge is lifted straight up like one held by its middle.
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
@@ -72,9 +72,10 @@ LEVEL_SIN = 0.1
 HANDLE_DEPTH_M = 0.0
 #: How far inside a top's near edge (m) fingertips rest when its middle is out of reach.
 EDGE_INSET_M = 0.03
-#: How far (rad from straight down) the hand on a top's near edge leans back towards the robot:
-#: the wrist then stands nearer the base than the fingertips.
-EDGE_PITCH = math.radians(30.0)
+#: How far (rad from straight down) the hand on a top's near edge leans back towards the robot, in
+#: the order tried: the wrist then stands nearer the base than the fingertips, and at the steepest,
+#: under a board close over the top, out of the storage it reached into.
+EDGE_PITCHES = tuple(math.radians(degrees) for degrees in (0.0, 30.0, 50.0, 65.0))
 #: Level grasp variants tried in order: half turns about the gripper's axis, tilts about the
 #: handle's bar (negative: the gripper points down onto a level bar, the hand above it; `tilted`).
 FLIPS = (0.0, math.pi)
@@ -360,7 +361,7 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
     Returns:
         The fingers around it along each of `closing_directions` it fits within ``opening``;
         where it fits along none, the closed fingertips on its top along each, then on its top
-        just inside the edge nearest the base (straight down, then leaning back by `EDGE_PITCH`),
+        just inside the edge nearest the base (straight down, then leaning back by `EDGE_PITCHES`),
         the fingers closing across the line of sight, where that edge lies 1 cm or more from the middle.
     """
     directions = closing_directions(size, point, base_pose)
@@ -378,4 +379,4 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
     closing = np.array([-sight[1], sight[0], 0.0])
     return grasps + [ObjectGrasp(top_rotation(sign * closing, pitch, sight), -FINGERTIP_M, "fingertips-on-near-edge",
                                  touch=True, offset=-inset * sight)
-                     for pitch in (0.0, EDGE_PITCH) for sign in (1.0, -1.0)]
+                     for pitch in EDGE_PITCHES for sign in (1.0, -1.0)]

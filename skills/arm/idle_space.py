@@ -21,8 +21,8 @@ HAND_DIP_M = 0.03
 def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray], radius: float,
               near: Sequence[float], *, margin_m: float = 0.03, grid_m: float = 0.02,
               hand_radius_m: float = HAND_RADIUS_M, height: float | None = None,
-              allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed"
-              ) -> np.ndarray:
+              allowed: Callable[[np.ndarray], np.ndarray] | None = None, allowed_means: str = "allowed",
+              count: int = 1, apart_m: float = 0.15) -> np.ndarray:
     """A free place on a surface to put an object down: RoboEXP's idle space.
 
     Points standing above the surface's top (by more than 5 mm) must stay ``margin_m`` beyond the
@@ -46,9 +46,13 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
             the arm's reach, say, from `reach_along`: the nearest free place to ``near`` may lie at
             the table's far side, beyond what the arm can carry to); None: all.
         allowed_means: what ``allowed`` asks, for the error when no place is.
+        count: how many spots to give, nearest to ``near`` first, each ``apart_m`` from the others:
+            where the way to the first is blocked, the next may be clear.
+        apart_m: how far apart those spots are at least.
 
     Returns:
-        (x, y, top z) of the candidate nearest to ``near``.
+        (x, y, top z) of the candidate nearest to ``near``; with ``count`` above 1, (k, 3) of up
+        to ``count`` such spots, the nearest first.
 
     Raises:
         SkillPlanError: the surface is too small or has too few points, or no place is free.
@@ -80,8 +84,15 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     if not len(candidates):
         within = "" if allowed is None else f" {allowed_means}"
         raise SkillPlanError(f"idle spot: no free place {2 * clear:.2f} m across on the surface at {top:.3f} m{within}")
-    best = candidates[int(np.argmin(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1)))]
-    return np.array([best[0], best[1], top])
+    order = np.argsort(np.linalg.norm(candidates - np.asarray(near, dtype=float)[:2], axis=1), kind="stable")
+    chosen: list[np.ndarray] = []
+    for candidate in candidates[order]:
+        if all(float(np.linalg.norm(candidate - other)) >= apart_m for other in chosen):
+            chosen.append(candidate)
+            if len(chosen) == count:
+                break
+    spots = np.array([[x, y, top] for x, y in chosen])
+    return spots[0] if count == 1 else spots
 
 
 def reach_along(points_xy: np.ndarray, line_y: float, reach_m: float) -> tuple[np.ndarray, np.ndarray]:

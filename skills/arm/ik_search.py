@@ -24,6 +24,11 @@ from skills.arm.tcp_paths import line_poses
 _AHEAD = ((0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, -0.785), (0.2, 0.0, 0.0, 0.0, -2.0, 0.0, 3.57, 0.785))
 #: Cartesian step of approaches, pulls and carries (m).
 LINE_STEP_M = 0.01
+#: Random restarts after the seeds when seeking postures for a clear chain (`IKSearch.clear_chain`),
+#: which tries many targets in turn.
+CLEAR_RESTARTS = 4
+#: Postures of the first stage that pass the check followed through the chain at the most.
+CLEAR_POSTURES = 3
 
 
 class IKSearch:
@@ -44,6 +49,10 @@ class IKSearch:
         #: IK time (s) and solves so far, for the plan's report.
         self.seconds = 0.0
         self.solves = 0
+        # Postures and Cartesian paths already solved in this plan: trying the ways in and out of a
+        # grasp in turn (`clear_chain`) asks for the same ones many times.
+        self._postures: dict[bytes, list[np.ndarray]] = {}
+        self._paths: dict[bytes, np.ndarray | str] = {}
 
     def seeds(self, first: np.ndarray | None, target_local: np.ndarray) -> list[np.ndarray]:
         """IK seeds close to the target's posture, which keep IK off contorted solutions.
@@ -140,30 +149,26 @@ class IKSearch:
         Raises:
             SkillPlanError: a pose is unreachable or needs a jump.
         """
-        kin = self.arm.kin
-        began = time.perf_counter()
-        result = kin.plan_cartesian_path(start_q, [self.to_base @ pose for pose in poses_world], max_joint_jump=0.35,
-                                         max_deviation=0.004)
-        self.seconds += time.perf_counter() - began
-        self.solves += len(poses_world)
-        if not result.success:
-            raise SkillPlanError(f"IK: {what} unreachable: {result.reason}")
-        return result.q
+        key = np.asarray(start_q, dtype=float).tobytes() + np.asarray(poses_world, dtype=float).tobytes()
+        if key not in self._paths:
+            began = time.perf_counter()
+            result = self.arm.kin.plan_cartesian_path(start_q, [self.to_base @ pose for pose in poses_world],
+                                                      max_joint_jump=0.35, max_deviation=0.004)
+            self.seconds += time.perf_counter() - began
+            self.solves += len(poses_world)
+            self._paths[key] = result.q if result.success else result.reason
+        found = self._paths[key]
+        if isinstance(found, str):
+            raise SkillPlanError(f"IK: {what} unreachable: {found}")
+        return found
 
-    def chain(self, stages: list[tuple[str, str, Any]], check: PostureCheck | None = None) -> list[np.ndarray]:
+    def chain(self, stages: list[tuple[str, str, Any]]) -> list[np.ndarray]:
         """Joint waypoints for stages run one after the other from where the arm is.
-
-        With ``check``, the postures of the first stage are tried in turn (`solutions`) until one
-        from which the joint-space move there and every waypoint of every stage pass it; when
-        none does, the first posture's chain is given, as without a check. A later "free" stage
-        takes the first of its postures that passes.
 
         Args:
             stages: (what, kind, target) each: kind "free" an IK solution for the pose ``target``
                 (a one-row array), "line" a straight TCP line from the previous stage's pose to
                 ``target``, "path" the TCP through the poses ``target``.
-            check: what each stage's postures must pass: called with the stage's ``what`` and a
-                joint vector, it returns a problem in words or None.
 
         Returns:
             Each stage's waypoints, in order.
@@ -171,24 +176,51 @@ class IKSearch:
         Raises:
             SkillPlanError: naming the first stage that cannot be reached.
         """
-        if check is None or not stages or stages[0][1] != "free":
-            return self._chain_from(self.here, None, stages, None)
-        what, _, target = stages[0]
-        fallback: list[np.ndarray] | None = None
-        for q in self.solutions(target, what):
-            chains = [q[None, :], *self._chain_from(q, target, stages[1:], check)]
-            if _failed(chains):
-                continue
-            fallback = fallback or chains
-            if _first_problem(check, what, _joint_line(self.here, q)) is None \
-                    and _chains_problem(check, stages, chains) is None:
-                return chains
-        return fallback or self._chain_from(self.here, None, stages, None)  # raises, naming the stage
+        return self._chain_from(self.here, None, stages, None)
+
+    def clear_chain(self, stages: list[tuple[str, str, Any]], check: PostureCheck) -> list[np.ndarray] | None:
+        """The stages' waypoints (as `chain`, which must begin with a "free" stage) through postures
+        that pass ``check``: the postures of the first stage are tried in turn (`solutions`) until
+        one with which every waypoint of every stage passes; a later "free" stage takes the first
+        of its postures that passes. The free move to the first stage is the plan's to route
+        (`skills.arm.plan_builder.PlanBuilder.free_move`).
+
+        Args:
+            stages: as for `chain`.
+            check: called with a stage's ``what`` and a joint vector, it returns a problem in words
+                or None.
+
+        Returns:
+            Each stage's waypoints, or None when no posture passes (or none reaches).
+        """
+        what, kind, target = stages[0]
+        assert kind == "free", "a clear chain begins with a free stage"
+        key = np.asarray(target, dtype=float).tobytes()
+        if key not in self._postures:
+            try:
+                self._postures[key] = list(self.solutions(target, what, restarts=CLEAR_RESTARTS))
+            except SkillPlanError:
+                self._postures[key] = []
+        tried = 0
+        try:
+            for q in self._postures[key]:
+                if tried == CLEAR_POSTURES:
+                    break
+                if check(what, q) is not None:
+                    continue
+                tried += 1
+                chains = [q[None, :], *self._chain_from(q, target, stages[1:], check)]
+                if not _failed(chains):
+                    return chains
+        except SkillPlanError:
+            pass
+        return None
 
     def _chain_from(self, q: np.ndarray, pose: np.ndarray | None, stages: list[tuple[str, str, Any]],
                     check: PostureCheck | None) -> list[np.ndarray]:
         """The stages' waypoints from ``q`` (the TCP at ``pose``); with ``check``, a stage that cannot
-        be reached ends the list early with an empty array rather than raising."""
+        be reached, or whose waypoints fail the check, ends the list early with an empty array
+        rather than raising."""
         kin = self.arm.kin
         chains: list[np.ndarray] = []
         for what, kind, target in stages:
@@ -210,6 +242,9 @@ class IKSearch:
                     raise
                 chains.append(np.zeros((0, len(q))))
                 return chains
+            if check is not None and _first_problem(check, what, chains[-1][::2]) is not None:
+                chains[-1] = np.zeros((0, len(q)))
+                return chains
         return chains
 
     def _free(self, target: np.ndarray, what: str, seed: np.ndarray | None, check: PostureCheck | None) -> np.ndarray:
@@ -228,17 +263,10 @@ class IKSearch:
 
 #: What a chain's postures must pass: (stage, joint positions) -> a problem in words, or None.
 PostureCheck = Callable[[str, np.ndarray], "str | None"]
-#: Joint positions a straight joint-space move is checked at.
-JOINT_LINE_SAMPLES = 12
 
 
 def _failed(chains: list[np.ndarray]) -> bool:
     return any(len(chain) == 0 for chain in chains)
-
-
-def _joint_line(start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Joint positions along the straight joint-space move from ``start`` to ``end``."""
-    return start + np.outer(np.linspace(0.0, 1.0, JOINT_LINE_SAMPLES), end - start)
 
 
 def _first_problem(check: PostureCheck, what: str, waypoints: np.ndarray) -> str | None:
@@ -246,12 +274,4 @@ def _first_problem(check: PostureCheck, what: str, waypoints: np.ndarray) -> str
         problem = check(what, q)
         if problem is not None:
             return f"{what}: {problem}"
-    return None
-
-
-def _chains_problem(check: PostureCheck, stages: list[tuple[str, str, Any]], chains: list[np.ndarray]) -> str | None:
-    for (what, _, _), waypoints in zip(stages, chains):
-        problem = _first_problem(check, what, waypoints[::2] if len(waypoints) > 2 else waypoints)
-        if problem is not None:
-            return problem
     return None

@@ -13,6 +13,7 @@ released object down onto whatever is under it), open, back up, ready.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,8 +23,8 @@ from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import searched
-from skills.arm.grasps import UP, hand_touches, object_grasps
-from skills.arm.ik_search import IKSearch, PostureCheck
+from skills.arm.grasps import UP, ObjectGrasp, hand_touches, object_grasps
+from skills.arm.ik_search import IKSearch
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
 
@@ -37,8 +38,17 @@ STRADDLE_CLEARANCE_M = 0.008
 #: 1000 of tuning-wide).
 HIGH_ABOVE_M = 0.12
 #: The stages of a pick in which the hand carries the object, and those on the way to it.
-_CARRYING = frozenset({"lift", "carry", "lower"})
-_COMING = frozenset({"high above the object", "above the object"})
+_CARRYING = frozenset({"lift", "out", "carry", "in", "lower"})
+_COMING = frozenset({"high above the object", "above the object", "before the object"})
+#: How far before the pose above the object (towards the robot, m) the hand may come in from.
+BEFORE_M = (0.15, 0.3, 0.45)
+#: A low lift clears the object's own height by this much, and is never lower than `LOW_LIFT_M` (m).
+LIFT_SPARE_M, LOW_LIFT_M = 0.015, 0.05
+#: Grasps of the middle of an object tried for a chain clear all the way, best first, before the
+#: grasps of its near edge and settling for one that merely reaches; routes tried so at the most.
+CLEAR_GRASPS, CLEAR_ROUTES = 4, 48
+#: How far over the pose above an object (m) a board makes the pick a confined one (`_confined`).
+CONFINED_M = 0.3
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -53,7 +63,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         base_pose: where the base stands.
         object_point: the object's top grasp point (world).
         extent: its box (dx, dy, dz).
-        place_point: where that point should end, less ``clearance_m``.
+        place_point: where that point should end, less ``clearance_m``; or (k, 3) such places, to
+            take the first a chain clear all the way reaches (the first when none does).
         skill: the plan's name.
         surface_z: the table's top, which free moves keep the hand above.
         lift_m: how high above the grasp and the release the object is carried.
@@ -65,13 +76,16 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
-        rest on its top.
+        rest on its top, ``info["place_point"]`` where it goes.
 
     Raises:
         SkillPlanError: a bad argument, or no grasp reaches along the whole chain.
     """
     top = checked_vector(object_point, "object_point")
-    place = checked_vector(place_point, "place_point")
+    places = np.asarray(place_point, dtype=float)
+    places = [checked_vector(point, "place_point") for point in (places if places.ndim == 2 else [place_point])]
+    if not places:
+        raise SkillPlanError("place_point: no place given")
     size = checked_vector(extent, "extent")
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
@@ -85,17 +99,23 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                        np.vstack([near, box_points(top - size[2] / 2 * UP, size)]))
     builder = PlanBuilder(arm, here, base_pose, surface_z, around)
     failures: list[str] = []
-    ways = []
-    for way in object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth):
-        grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
-        release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
-        ways.append((way, grasp, release, _touched(grasp, release, lift_m, keep_off)))
-    ways.sort(key=lambda entry: entry[3])  # clear of the neighbours first; stable: else best first
-    for way, grasp, release, _ in ways:
-        above_grasp, above_release = shifted(grasp, lift_m * UP), shifted(release, lift_m * UP)
-        down = "down onto the object's top" if way.touch else "down onto the object"
-        rest = [(down, "line", grasp), ("lift", "line", above_grasp), ("carry", "line", above_release),
-                ("lower", "line", release), ("back up", "line", above_release)]
+    toward = np.array([*(np.asarray(base_pose[:2], dtype=float) - top[:2]), 0.0])
+    toward /= max(float(np.linalg.norm(toward)), 1e-9)
+    grasps = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth)
+    # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
+    # each, the likeliest first); else, as without such checks, to the first place, the first
+    # grasp that reaches at all.
+    routes: list[tuple[_Route, bool]] = []
+    for index, place in enumerate(places):
+        ways = _ways(grasps, top, place, lift_m, clearance_m, keep_off)
+        to_place = np.array([*(np.asarray(base_pose[:2], dtype=float) - place[:2]), 0.0])
+        to_place /= max(float(np.linalg.norm(to_place)), 1e-9)
+        routes += [(route, True) for route in _clear_routes(ways, lift_m, size, keep_off, toward, to_place)]
+        if index == 0:
+            plain = [(route, False) for route in _plain_routes(ways, lift_m, keep_off)]
+    routes += plain
+    for route, clear in routes:
+        way, grasp, release = route.way, route.grasp, route.release
         carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
 
         def check(what: str, posture: np.ndarray) -> str | None:
@@ -103,42 +123,166 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 return around.problem(posture, hand=True)
             return clearance.problem(posture, carried if what in _CARRYING else None)
 
+        stages = route.stages()
         try:
-            chains = _chain_from_above(ik, above_grasp, rest, keep_off, check)
-            come, chain = chains[:-len(rest)], chains[-len(rest):]
-            descent = searched(ik, chain[0], grasp, down) if way.touch else chain[0]
+            chains = ik.clear_chain(stages, check) if clear else ik.chain(stages)
+            if chains is None:
+                continue
+            named = dict(zip((stage[0] for stage in stages), chains))
+            down = route.down
+            named[down] = searched(ik, named[down], grasp, down) if way.touch else named[down]
         except SkillPlanError as error:
             failures.append(str(error))
             continue
-        builder.free_move("to above the object" if len(come) == 1 else "to high above the object", come[0][-1])
-        if len(come) == 2:
-            builder.move("down to above the object", come[1], careful=True, stop_on_contact=True,
-                         tcp_target=above_grasp)
-        builder.grasp(way, down, descent, grasp, "object")
-        builder.move("lift", chain[1], careful=True, tcp_target=above_grasp)
-        builder.move("carry", chain[2], careful=False, tcp_target=above_release)
-        builder.move("lower", chain[3], careful=True, tcp_target=release, touch="support")
-        builder.gripper("open", "put the object down")
-        builder.move("back up", chain[4], careful=True, tcp_target=above_release)
-        builder.free_move("to ready", arm.ready, via_ready=False)
+        route.build(builder, named)
+        place = release[:3, 3] - way.offset - (clearance_m - way.depth) * UP
         info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
-                "grasp_depth_m": way.depth, "grasp": way.name}
+                "grasp_depth_m": way.depth, "grasp": way.name, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
     raise SkillPlanError(best_failure(failures, "pick"))
 
 
-def _chain_from_above(ik: IKSearch, above: np.ndarray, rest: list[tuple[str, str, Any]],
-                      keep_off: np.ndarray | None, check: PostureCheck) -> list[np.ndarray]:
-    """The pick's chain, coming to the pose ``above`` the object from `HIGH_ABOVE_M` higher,
-    straight down, where `_open_above`; else, or where that is out of reach, straight to it. Each
-    tries the arm's postures for the clear one (`IKSearch.chain`)."""
+def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, lift_m: float, clearance_m: float,
+          keep_off: np.ndarray | None) -> list[tuple[ObjectGrasp, np.ndarray, np.ndarray, int]]:
+    """(grasp, TCP at the grasp, TCP at the release, points touched on the way down) for each
+    grasp, those whose hand touches fewer of ``keep_off`` first (stable: else best first)."""
+    ways = []
+    for way in grasps:
+        grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
+        release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
+        ways.append((way, grasp, release, _touched(grasp, release, lift_m, keep_off)))
+    return sorted(ways, key=lambda entry: entry[3])
+
+
+@dataclass(frozen=True)
+class _Route:
+    """One way to pick: the grasp (``way``, the TCP at ``grasp`` and at ``release``), how high the
+    object is lifted, how the hand comes to the pose above it (``approach``: its first stage
+    free), and by how much (world offsets; zero for none) the object is drawn out towards the robot
+    after the lift (``out``) and brought in from before its place (``inward``): out of the
+    cabinet it stood in, into the one it goes back to."""
+
+    way: ObjectGrasp
+    grasp: np.ndarray
+    release: np.ndarray
+    lift: float
+    approach: tuple[tuple[str, str, Any], ...]
+    out: np.ndarray
+    inward: np.ndarray
+
+    @property
+    def down(self) -> str:
+        return "down onto the object's top" if self.way.touch else "down onto the object"
+
+    def stages(self) -> list[tuple[str, str, Any]]:
+        """The chain's stages: the approach, down, lift, out, carry, in, lower, back up."""
+        above_grasp, above_release = shifted(self.grasp, self.lift * UP), shifted(self.release, self.lift * UP)
+        stages = [*self.approach, (self.down, "line", self.grasp), ("lift", "line", above_grasp)]
+        if np.any(self.out):
+            stages.append(("out", "line", shifted(above_grasp, self.out)))
+        stages.append(("carry", "line", shifted(above_release, self.inward)))
+        if np.any(self.inward):
+            stages.append(("in", "line", above_release))
+        return stages + [("lower", "line", self.release), ("back up", "line", above_release)]
+
+    def build(self, builder: PlanBuilder, named: dict[str, np.ndarray]) -> None:
+        """The plan's steps from the stages' waypoints (``named`` by stage)."""
+        targets = {what: target for what, _, target in self.stages()}
+        first = self.approach[0][0]
+        builder.free_move(f"to {first}", named[first][-1])
+        if first != "above the object":
+            way_in = "down to above the object" if first.startswith("high") else "in to above the object"
+            builder.move(way_in, named["above the object"], careful=True, stop_on_contact=True,
+                         tcp_target=targets["above the object"])
+        builder.grasp(self.way, self.down, named[self.down], self.grasp, "object")
+        for what in ("lift", "out", "carry", "in"):
+            if what in named:
+                builder.move(what, named[what], careful=what != "carry", tcp_target=targets[what])
+        builder.move("lower", named["lower"], careful=True, tcp_target=self.release, touch="support")
+        builder.gripper("open", "put the object down")
+        builder.move("back up", named["back up"], careful=True, tcp_target=targets["back up"])
+        builder.free_move("to ready", builder.arm.ready, via_ready=False)
+
+
+def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
+                  toward: np.ndarray, to_place: np.ndarray) -> list[_Route]:
+    """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
+
+    In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
+    before the pose above.
+    Where a board stands close over the object or its place (`_confined`: a box inside a cabinet)
+    a hand straight down has no room for its wrist: the top's near edge is grasped, the hand
+    leaning back towards the robot, the steepest first; the object is lifted only as high as
+    clears what it covers first (`_lifts`); the hand comes in directly or from before the pose
+    above it; and the object is drawn straight out of the storage before the carry, or brought
+    straight into it after, by each of `BEFORE_M`."""
+    routes = []
+    open_ways = [entry for entry in ways if entry[0].name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
+    edge_ways = sorted((entry for entry in ways if entry[0].name == "fingertips-on-near-edge"),
+                       key=lambda entry: -float(entry[0].rotation[2, 2]))  # the steepest lean first
+    for way, grasp, release, _ in [*edge_ways, *open_ways]:
+        here = _confined(shifted(grasp, lift_m * UP), keep_off)
+        there = _confined(shifted(release, lift_m * UP), keep_off)
+        if way.name == "fingertips-on-near-edge" and not (here or there):
+            continue
+        for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
+            approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
+            for approach in approaches:
+                for out in BEFORE_M[:2] if here else (0.0,):
+                    for inward in BEFORE_M[:2] if there else (0.0,):
+                        routes.append(_Route(way, grasp, release, lift, tuple(approach), out * toward,
+                                             inward * to_place))
+    open_routes = [route for route in routes if not np.any(route.out) and not np.any(route.inward)
+                   and route.way.name != "fingertips-on-near-edge"]
+    return (open_routes + [route for route in routes if not any(route is other for other in open_routes)]
+            )[:CLEAR_ROUTES]
+
+
+def _plain_routes(ways: list[Any], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
+    """The routes as they were before clear chains were sought: every grasp, lifted `lift_m`, from
+    high above where that is open, else directly."""
+    none = np.zeros(3)
+    routes = []
+    for way, grasp, release, _ in ways:
+        above = shifted(grasp, lift_m * UP)
+        for approach in _approaches(above, keep_off, none, before=False):
+            routes.append(_Route(way, grasp, release, lift_m, tuple(approach), none, none))
+    return routes
+
+
+def _lifts(lift_m: float, size: np.ndarray) -> list[float]:
+    """How high above its place an object may be lifted, the usual first: then only as high as
+    clears what it covers (its own height: a box over a smaller one), for a board close above it."""
+    low = max(float(size[2]) + LIFT_SPARE_M, LOW_LIFT_M)
+    return [lift_m] if low >= lift_m else [lift_m, low]
+
+
+def _approaches(above: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarray, before: bool
+                ) -> list[list[tuple[str, str, Any]]]:
+    """Ways for the hand to the pose ``above`` the object, to try in turn: from `HIGH_ABOVE_M` higher,
+    straight down, where `_open_above`; directly; and, with ``before``, from in front of it
+    (``toward`` the robot, `BEFORE_M`), straight in: through the opening of a cabinet, past what
+    stands beside it."""
+    approaches = []
     if _open_above(above, keep_off):
-        try:
-            return ik.chain([("high above the object", "free", shifted(above, HIGH_ABOVE_M * UP)),
-                             ("above the object", "line", above), *rest], check)
-        except SkillPlanError:
-            pass  # out of reach up there: as before
-    return ik.chain([("above the object", "free", above), *rest], check)
+        approaches.append([("high above the object", "free", shifted(above, HIGH_ABOVE_M * UP)),
+                           ("above the object", "line", above)])
+    approaches.append([("above the object", "free", above)])
+    if before:
+        approaches.append([("before the object", "free", shifted(above, BEFORE_M[1] * toward)),
+                           ("above the object", "line", above)])
+    return approaches
+
+
+def _confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
+    """Whether something stands over ``pose`` within `CONFINED_M` (a cabinet's board over a box in
+    it): points of ``keep_off`` within 8 cm of it across, above it."""
+    if keep_off is None or not len(keep_off):
+        return False
+    points = np.asarray(keep_off, dtype=float)
+    across = np.linalg.norm(points[:, :2] - pose[:2, 3], axis=1) < 0.08
+    over = (points[:, 2] > pose[2, 3]) & (points[:, 2] < pose[2, 3] + CONFINED_M)
+    return int(np.count_nonzero(across & over)) >= 3
 
 
 def _open_above(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:

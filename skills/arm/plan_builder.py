@@ -13,6 +13,7 @@ import numpy as np
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Clearance
+from skills.arm.free_path import connect, shortcut
 from skills.arm.frames import base_transform
 from skills.arm.grasps import HandleGrasp, ObjectGrasp, hand_bottom
 from skills.arm.ik_search import IKSearch
@@ -24,6 +25,9 @@ SURFACE_CLEARANCE_M = 0.01
 LIFT_RISES_M = (0.15, 0.3, 0.45)
 #: An arm within this (rad or m, any joint) of its stowed or ready pose folds without backing off first.
 FOLDED_RAD = 0.1
+#: How far (rad or m, any joint) a way round may go from where the arm starts before it must keep
+#: clear: an arm that just let go of a door stands touching it.
+ESCAPE_RAD = 0.15
 
 
 class PlanBuilder:
@@ -136,6 +140,64 @@ class PlanBuilder:
         end = [goal]
         if via_ready and arm.stowed is not None and np.abs(goal - arm.stowed).max() < FOLDED_RAD and not stowed:
             end.insert(0, arm.ready)
+        routes = [*self._over_the_surface(start, end)]
+        if self.clearance is not None and not any(np.abs(q - arm.ready).max() < FOLDED_RAD for q in (*start, *end)):
+            routes += self._over_the_surface([*start, arm.ready], end)  # folded in on the way
+        target = self.base @ arm.kin.forward(goal)
+        low = math.inf
+        above: Step | None = None  # the first route that keeps the hand above the surface
+        clear = False
+        for waypoints in routes:
+            step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
+            low = self.lowest(step)
+            if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
+                continue
+            above = above or step
+            if self.clearance is None or self.clearance.path_problem(step.samples, every=3, hand=True) is None:
+                above, clear = step, True
+                break
+        if not clear and self.clearance is not None:
+            above = self._way_round(name, start, end, target) or above
+        if above is None:
+            assert self.surface_z is not None
+            raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
+                                 f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
+                                 f"at {self.surface_z:.3f} m, even with the lift up")
+        self.steps.append(above)
+        self.q = goal.copy()
+
+    def _way_round(self, name: str, start: list[np.ndarray], end: list[np.ndarray], target: np.ndarray
+                   ) -> Step | None:
+        """A free move round what stands near (`skills.arm.free_path`), for when no straight route is
+        clear: the whole arm clear of it, the hand above the surface. Where the arm starts touching
+        something (the door it let go of), the first `ESCAPE_RAD` of the way out are not held
+        against it. None when no way is found, or the trajectory through the way's waypoints
+        strays into something."""
+        clearance = self.clearance
+        assert clearance is not None
+        origin = start[-1]
+
+        def valid(q: np.ndarray) -> bool:
+            if float(np.abs(q - origin).max()) < ESCAPE_RAD:
+                return True
+            if self.surface_z is not None and hand_bottom(self.base @ self.arm.kin.forward(q), self.base,
+                                                          self.arm.body_radius) < self.surface_z + SURFACE_CLEARANCE_M:
+                return False
+            return clearance.problem(q, hand=True) is None
+
+        rng = np.random.default_rng(self.arm.seed)
+        way = connect(origin, end[0], valid, self.arm.kin.lower, self.arm.kin.upper, rng)
+        if way is None:
+            return None
+        way = shortcut(way, valid, rng)
+        step = self.step(name, np.array([*start[:-1], *way, *end[1:]]), careful=False, stop_on_contact=True,
+                         tcp_target=target)
+        return step if all(valid(q) for q in step.samples[::3]) else None
+
+    def _over_the_surface(self, start: list[np.ndarray], end: list[np.ndarray]) -> list[np.ndarray]:
+        """Joint routes from ``start`` to ``end``: straight, then with the lift raised on the way by
+        `LIFT_RISES_M` in turn and to the top (over a known surface)."""
+        arm = self.arm
         routes = [np.array([*start, *end])]
         lift = arm.lift_index
         if self.surface_z is not None and lift is not None:
@@ -146,25 +208,7 @@ class PlanBuilder:
                 for q in over:
                     q[lift] = min(top, low_lift + rise)
                 routes.append(np.array([*start, *over, *end]))
-        target = self.base @ arm.kin.forward(goal)
-        low = math.inf
-        above: Step | None = None  # the first route that keeps the hand above the surface
-        for waypoints in routes:
-            step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
-            low = self.lowest(step)
-            if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
-                continue
-            above = above or step
-            if self.clearance is None or self.clearance.path_problem(step.samples, every=3, hand=True) is None:
-                above = step
-                break
-        if above is None:
-            assert self.surface_z is not None
-            raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
-                                 f"{self.surface_z + SURFACE_CLEARANCE_M - low:.3f} m too low over the surface "
-                                 f"at {self.surface_z:.3f} m, even with the lift up")
-        self.steps.append(above)
-        self.q = goal.copy()
+        return routes
 
     def lowest(self, step: Step) -> float:
         """How low the hand comes over a move, to keep it above a surface.
