@@ -191,6 +191,39 @@ def test_a_thing_the_perception_finds_it_saw_twice_is_one_node() -> None:
     assert result.graph.successors("open:3", "action-object") == ["o7"]
 
 
+@dataclass
+class ABoxSeenAgainWherePutDown:
+    """A box on a table, lifted off a smaller box and put down: the look after the put-down sees
+    the smaller box (8) and, as a new thing, the box where it was put down (9); the explorer
+    judges both. The look after the smaller box is lifted finds box 9 to be box 2 (``absorbed``
+    into the older one), before anything was done to 9."""
+
+    looks: int = 0
+    calls: list[str] = field(default_factory=list)
+
+    def observe(self) -> list[Detection]:
+        self.looks += 1
+        table, box = Detection("1", "table"), Detection("2", "box", "1", "on")
+        if self.looks == 1:
+            return [table, box]
+        if self.looks == 2:
+            return [table, box, Detection("8", "box", "1", "on"), Detection("9", "box", "1", "on")]
+        return [table, Detection("2", "box", "1", "on", hints={"absorbed": ("9",)}), Detection("8", "box", "1", "on")]
+
+    def execute(self, call: SkillCall) -> SkillResult:
+        self.calls.append(f"{call.primitive} {call.target}")
+        return SkillResult(True)
+
+
+def test_a_node_found_to_be_another_goes_with_the_actions_never_run_on_it() -> None:
+    perception = ABoxSeenAgainWherePutDown()
+    result = explore(perception, RuleDecisionModule(), perception)
+    assert [node.id for node in result.graph.objects() if node.label == "box"] == ["o2", "o8"]
+    assert "pick:9" not in result.graph
+    assert perception.calls == ["pick_away o2", "pick_away o8", "pick_back o8", "pick_back o2"]  # 9 never lifted
+    assert result.returned_to_start and not result.notes
+
+
 def test_rewards_follow_the_paper() -> None:
     result = Recorder(cabinet_behind_bottle()).run(reward_lambda=0.25)
     # pick_away: no new node, U loses pick:5 -> 1 - λ; open: the apple is new (+1), U gains the apple

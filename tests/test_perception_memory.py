@@ -216,3 +216,22 @@ def test_voxel_keys_pack_round_trip_and_tolerant_overlap() -> None:
     assert near_count(a, np.sort(pack(np.array([[2, 0, 0]])))) == 0
     with pytest.raises(ValueError, match="voxel indices"):
         pack(np.array([[1 << 21, 0, 0]]))
+
+
+def test_a_thing_seen_in_two_pieces_keeps_the_identity_it_was_first_known_by() -> None:
+    # The left end of a book is seen first, then, in a frame without it, the rest of it: two
+    # instances. A frame of the whole book is both; the older one lives on, though the newer,
+    # bigger piece is the better match: the explorer has acted on the thing by its first id.
+    memory = InstanceMemory()
+    left = Box.at(9, "book", (-0.27, 0.0, 0.77), (0.1, 0.15, 0.04))
+    rest = Box.at(9, "book", (0.0, 0.0, 0.77), (0.36, 0.15, 0.04))
+    whole = Box.at(9, "book", (-0.05, 0.0, 0.77), (0.46, 0.15, 0.04))  # the left end's edge lies beyond it
+    screen = Box.at(10, "box", (-0.28, -0.3, 0.85), (0.22, 0.02, 0.3))  # hides the left end from VIEW_A
+    _integrate(memory, [TABLE, left], VIEW_A)
+    first = _holding(memory, "book", left)
+    _integrate(memory, [TABLE, screen, rest], VIEW_A)
+    second = _holding(memory, "book", rest)
+    assert second.id != first.id
+    update = _integrate(memory, [TABLE, whole], VIEW_A)
+    assert update.absorbed == {second.id: first.id}
+    assert _holding(memory, "book", whole, tol=0.05).id == first.id

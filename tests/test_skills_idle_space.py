@@ -66,3 +66,11 @@ def test_things_lower_than_where_the_hand_works_keep_only_the_object_s_own_room(
     assert float(np.min(np.linalg.norm(soap[:, :2] - unknown[:2], axis=1))) >= 0.11 + 0.03 - 1e-9
     flat = idle_spot(table, [soap], 0.04, near, height=0.05)  # as low as the soap: the hand meets it
     assert float(np.min(np.linalg.norm(soap[:, :2] - flat[:2], axis=1))) >= 0.11 + 0.03 - 1e-9
+
+
+def test_several_spots_come_nearest_first_and_apart() -> None:
+    spots = idle_spot(_table(), [], 0.035, (0.0, 0.0), count=3, apart_m=0.15)
+    assert spots.shape == (3, 3)
+    distances = np.linalg.norm(spots[:, :2], axis=1)
+    assert list(distances) == sorted(distances) and distances[0] < 0.02
+    assert min(np.linalg.norm(spots[i, :2] - spots[j, :2]) for i in range(3) for j in range(i + 1, 3)) >= 0.15

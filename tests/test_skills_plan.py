@@ -392,3 +392,47 @@ def test_a_box_put_down_close_before_the_robot_keeps_the_elbow_off_the_table(pla
             assert clearance.path_problem(step.samples, every=2) is None, step.name
     release = base_transform(base_pose) @ planner.kin.forward(plan.steps[-4].samples[-1])
     assert release[:2, 3] == pytest.approx(place[:2], abs=0.002)
+
+
+def _cabinet_with_open_door() -> np.ndarray:
+    """Points of a cabinet (floor 0.76 m, board 1.16 m, its inside 0.33 m across) whose door
+    stands open square to its front on the left, as the memory holds them."""
+    step = 0.01
+    xs, ys, zs = np.arange(-0.48, -0.14, step), np.arange(0.05, 0.35, step), np.arange(0.76, 1.17, step)
+    board = [(x, y, z) for x in xs for y in ys for z in (0.755, 1.165)]
+    sides = [(x, y, z) for x in (-0.485, -0.135) for y in ys for z in zs]
+    back = [(x, 0.35, z) for x in xs for z in zs]
+    door = [(-0.49, y, z) for y in np.arange(-0.3, 0.05, step) for z in zs]
+    return np.array(board + sides + back + door)
+
+
+def test_a_box_under_a_board_is_lifted_by_its_near_edge_and_drawn_out_before_it_is_carried(
+        planner: ArmPlanner) -> None:
+    # recursive 1025 (tuning-wide): a shell 8 cm tall in a cabinet, 32 cm under its board. A hand
+    # straight down over it had no room for its wrist, and its free move pushed the door shut.
+    base_pose = (-0.311, -0.69, math.pi / 2)
+    top, extent, place = np.array([-0.311, 0.158, 0.837]), (0.18, 0.15, 0.08), np.array([0.025, -0.115, 0.832])
+    cabinet = _cabinet_with_open_door()
+    plan = planner.plan_pick(np.array(READY), base_pose, top, extent, place, surface_z=SURFACE, keep_off=cabinet)
+    assert plan.info["clear"] and plan.info["grasp"] == "fingertips-on-near-edge"
+    assert plan.info["lift_m"] < 0.15  # only as high as clears what it covers, under the board
+    names = [step.name for step in plan.steps]
+    assert names.index("lift") < names.index("out") < names.index("carry")
+    clearance = Clearance(planner, base_transform(base_pose), SURFACE, cabinet)
+    for step in plan.steps:
+        if step.kind == "move" and step.name.startswith("to "):
+            assert clearance.path_problem(step.samples, every=3) is None, step.name
+    _check_runnable(plan, np.array(READY))
+
+
+def test_of_several_places_a_pick_takes_the_first_a_clear_way_reaches(planner: ArmPlanner) -> None:
+    top = np.array([0.3, -0.15, 0.87])
+    blocked, free = np.array([0.55, -0.2, 0.87]), np.array([0.1, -0.2, 0.87])
+    ys, zs = np.arange(-0.35, 0.0, 0.01), np.arange(0.76, 1.3, 0.01)
+    wall = np.array([(0.45, y, z) for y in ys for z in zs])  # between the object and the first place
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), np.array([blocked, free]),
+                             surface_z=SURFACE, keep_off=wall)
+    assert plan.info["clear"] and plan.info["place_point"] == pytest.approx(free)
+    one = planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), blocked, surface_z=SURFACE,
+                            keep_off=wall)
+    assert not one.info["clear"] and one.info["place_point"] == pytest.approx(blocked)  # as before: it reaches
