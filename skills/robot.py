@@ -278,6 +278,16 @@ class Robot:
     def _pick_back(self, call: SkillCall, obj: Instance) -> SkillResult:
         return self.picks.pick_back(obj)
 
+    def stow(self) -> None:
+        """Fold the arm into the base, as it must be for the base to drive on freely.
+
+        Raises:
+            SkillPlanError: the arm could not be folded.
+        """
+        result = self.body.run(STOW)
+        if not result.ok:
+            raise SkillPlanError(result.reason)
+
     def _nearest_surface(self) -> Instance | None:
         """The remembered table or counter nearest the base, or None."""
         body = self.body

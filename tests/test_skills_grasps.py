@@ -105,8 +105,8 @@ def test_objects_that_fit_are_grasped_around_and_wider_ones_by_their_top() -> No
     assert all(g.depth == -FINGERTIP_M and g.rotation[:, 2] == pytest.approx([0, 0, -1]) for g in middle)
     assert all(g.offset == pytest.approx(0.0) for g in middle)
     # then on the top just inside its near edge, straight down and leaning back towards the robot
-    assert len(edge) == 4 and all(g.name == "fingertips-on-near-edge" and g.touch for g in edge)
+    assert len(edge) == 8 and all(g.name == "fingertips-on-near-edge" and g.touch for g in edge)
     assert all(g.offset == pytest.approx([-(0.09 - EDGE_INSET_M), 0.0, 0.0]) for g in edge)
-    assert [round(float(math.degrees(math.acos(-g.rotation[2, 2])))) for g in edge] == [0, 0, 30, 30]
+    assert [round(float(math.degrees(math.acos(-g.rotation[2, 2])))) for g in edge] == [0, 0, 30, 30, 50, 50, 65, 65]
     assert all(g.rotation[0, 2] > 0 for g in edge[2:])  # the approach leans away: the wrist nearer the base
     assert all(abs(g.rotation[:, 1] @ [1.0, 0.0, 0.0]) < 1e-9 for g in edge)  # closing across the line of sight
