@@ -302,13 +302,3 @@ class Robot:
 def _ahead(pose: Pose2D) -> np.ndarray:
     """The unit vector the base faces."""
     return np.array([math.cos(pose[2]), math.sin(pose[2])])
-
-    def stow(self) -> None:
-        """Fold the arm into the base, as it must be for the base to drive on freely.
-
-        Raises:
-            SkillPlanError: the arm could not be folded.
-        """
-        result = self.body.run(STOW)
-        if not result.ok:
-            raise SkillPlanError(result.reason)

@@ -307,7 +307,9 @@ class DoorsAndDrawers:
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
                           held=opened.held)
-        left = opened.amount if result.achieved is None else result.achieved
+        # A drawer is pushed on past where it was seen shut until it meets its end stop, and the hand
+        # may go on a little further than the part; the memory holds a shut part where it was seen shut.
+        left = opened.amount if result.achieved is None else max(result.achieved, 0.0)
         motion = part_motion(opened.geometry, left) @ np.linalg.inv(part_motion(opened.geometry, opened.amount))
         body.memory.move(part.id, motion)
         if not result.ok:

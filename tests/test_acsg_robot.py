@@ -160,3 +160,12 @@ def test_drawers_pushed_shut_stand_shut() -> None:
     row = run_robot("drawer-only", 1021)
     assert row["failed_actions"] == []
     assert row["success"] and row["state_recovered"]
+
+
+def test_a_drawer_pushed_past_where_it_was_seen_shut_is_remembered_shut() -> None:
+    # drawer-only 1053 (tuning-wide): the hand pushing a drawer shut went 2 cm past where the drawer
+    # was seen shut; the memory carried the drawer as far, and its front, seen again where it stood,
+    # became a second drawer.
+    row = run_robot("drawer-only", 1053)
+    assert row["failed_actions"] == []
+    assert row["success"] and row["graph_edit_distance"] == 0.0 and row["state_recovered"]

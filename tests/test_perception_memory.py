@@ -235,3 +235,21 @@ def test_a_thing_seen_in_two_pieces_keeps_the_identity_it_was_first_known_by() -
     update = _integrate(memory, [TABLE, whole], VIEW_A)
     assert update.absorbed == {second.id: first.id}
     assert _holding(memory, "book", whole, tol=0.05).id == first.id
+
+
+def test_a_low_drawer_belongs_to_its_own_chest_not_to_the_one_beside_it() -> None:
+    # drawer-only 1024 (tuning-wide): two chests of drawers 2 cm apart; of the left one only the
+    # top board shows above its fronts, 26 cm over its lowest drawer, while the right chest's side
+    # board stands within adjacency of that drawer's edge. The drawer went to the right chest.
+    drawers = [Front("drawer", (-0.338, 0.058), z) for z in ((0.77, 0.89), (0.90, 1.01), (1.02, 1.13))]
+    left = [b for b in storage(20, "drawer chest", (-0.34, 0.06), (0.25, 0.55), (0.75, 1.15), drawers)
+            if b.id != 20 or b.lo[2] > 1.0]  # the carcass shows only its top board
+    right = storage(30, "drawer chest", (0.08, 0.50), (0.25, 0.55), (0.75, 1.15),
+                    [Front("drawer", (0.082, 0.498), f.z) for f in drawers])
+    memory = InstanceMemory()
+    _integrate(memory, [TABLE, *left, *right], look_at((0.1, -0.8, 1.5), (0.1, 0.3, 0.95)))
+    left_chest = _holding(memory, "drawer chest", _part(left, 20))
+    right_chest = _holding(memory, "drawer chest", _part(right, 30))
+    for k in range(3):
+        assert memory.get(_holding(memory, "drawer", _part(left, 21 + 2 * k)).id).parent == left_chest.id, k
+        assert memory.get(_holding(memory, "drawer", _part(right, 31 + 2 * k)).id).parent == right_chest.id, k

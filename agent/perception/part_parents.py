@@ -2,8 +2,10 @@
 
 The labels say only what kind of thing a part is, not whose it is, so the parent is the instance of
 an allowed category (`MemoryConfig.part_parents`) with the most of the part's voxels within
-``part_gap_m`` of its own (geometric adjacency). A door or drawer that nothing is adjacent to
-falls back to the storage piece whose footprint holds it. The links are kept on both sides
+``part_gap_m`` of its own (geometric adjacency). A door or drawer goes first to a storage piece
+whose footprint holds it: the fronts of two chests side by side stand a few centimetres apart, so
+a drawer's edge is adjacent to the neighbour's carcass while its own carcass may show only its top,
+too far above a low drawer to be adjacent at all. The links are kept on both sides
 (``Instance.parent`` and the parent's ``children``) and never form a cycle.
 """
 
@@ -39,19 +41,20 @@ def attach_parts(instances: Mapping[int, Instance], live_instances: Sequence[Ins
         has_parent = inst.parent is not None and inst.parent in live
         if has_parent and inst.id not in seen:
             continue
-        best, best_count = None, 0
+        best, best_rank = None, (False, 0, -np.inf)
         points = inst.points()
+        centre = inst.centroid[:2]
         for candidate in live.values():
             if candidate.label not in allowed or is_ancestor(instances, inst.id, candidate.id):
                 continue  # (an instance is its own ancestor, so it is never its own parent)
             if candidate.id not in trees:
                 trees[candidate.id] = cKDTree(candidate.points())
             distance, _ = trees[candidate.id].query(points, distance_upper_bound=gap_m)
-            count = int(np.isfinite(distance).sum())
-            if count > best_count:
-                best, best_count = candidate.id, count
-        if best is None and not has_parent and inst.label != "handle":
-            best = _beneath_footprint(instances, inst, [c for c in live.values() if c.label in allowed], gap_m)
+            holds = inst.label != "handle" and _footprint_holds(candidate, centre, gap_m)
+            nearness = -float(np.linalg.norm(candidate.centroid[:2] - centre))  # among holders none touches
+            rank = (holds, int(np.isfinite(distance).sum()), nearness)
+            if (holds or rank[1] > 0) and rank > best_rank:
+                best, best_rank = candidate.id, rank
         if best is not None and best != inst.parent:
             set_parent(instances, inst, best)
 
@@ -95,17 +98,10 @@ def is_ancestor(instances: Mapping[int, Instance], ancestor: int, of: int) -> bo
     return False
 
 
-def _beneath_footprint(instances: Mapping[int, Instance], part: Instance, candidates: list[Instance],
-                       gap_m: float) -> int | None:
-    """The candidate whose footprint (x, y box, grown by ``gap_m``) holds the part's centre,
-    nearest first: the parent of a drawer low on a chest of drawers whose carcass shows only
-    above and beside the fronts, too far from this drawer for adjacency to find."""
-    centre = part.centroid[:2]
-    holding = []
-    for candidate in candidates:
-        if candidate.id == part.id or not len(candidate.keys) or is_ancestor(instances, part.id, candidate.id):
-            continue
-        lo, hi = candidate.bounds
-        if np.all(lo[:2] - gap_m <= centre) and np.all(centre <= hi[:2] + gap_m):
-            holding.append((float(np.linalg.norm(candidate.centroid[:2] - centre)), candidate.id))
-    return min(holding)[1] if holding else None
+def _footprint_holds(candidate: Instance, centre: np.ndarray, gap_m: float) -> bool:
+    """Whether ``centre`` (x, y) lies over the candidate's footprint grown by ``gap_m`` (a front
+    stands a little before its carcass)."""
+    if not len(candidate.keys):
+        return False
+    lo, hi = candidate.bounds
+    return bool(np.all(lo[:2] - gap_m <= centre) and np.all(centre <= hi[:2] + gap_m))
