@@ -253,3 +253,17 @@ def test_a_low_drawer_belongs_to_its_own_chest_not_to_the_one_beside_it() -> Non
     for k in range(3):
         assert memory.get(_holding(memory, "drawer", _part(left, 21 + 2 * k)).id).parent == left_chest.id, k
         assert memory.get(_holding(memory, "drawer", _part(right, 31 + 2 * k)).id).parent == right_chest.id, k
+
+
+def test_a_sliver_of_a_thing_s_far_side_seen_alone_is_that_thing() -> None:
+    # drawer-only 1 (tuning): looking into a drawer, the wrist camera saw only the lower edge of
+    # the far side of a book on the table, a voxel beyond the box of the book the head camera saw
+    # from the front (its top and near side), and touching none of its voxels: a second book.
+    memory = InstanceMemory()
+    book = Box.at(9, "book", (-0.06, -0.25, 0.775), (0.16, 0.23, 0.05))
+    _integrate(memory, [TABLE, book], VIEW_A)
+    first = _holding(memory, "book", book)
+    (x0, _, z0), (x1, y1, _) = book.lo, book.hi
+    sliver = Box(9, "book", (x0, y1 - 0.004, z0), (x1, y1 + 0.008, z0 + 0.02))  # all this view sees of it
+    _integrate(memory, [TABLE, sliver], look_at((0.0, 0.5, 1.2), (0.0, -0.2, 0.77)))
+    assert [inst.id for inst in memory.with_label("book")] == [first.id]

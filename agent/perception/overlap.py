@@ -19,7 +19,9 @@ top and lies outside its box, so it became a second cabinet, which the explorer 
 (a cabinet with no door of its own; the memory merged the two a view later, but the graph had the
 second already). A detection whose box lies wholly within the box of a same-label instance with its
 parts (`NESTED_SHARE`; the cabinet with its door) and fills at most half of it (`NESTED_VOLUME`) is
-a part of that instance seen from a new side. A thing nested in a same-label thing (a shell over a smaller
+a part of that instance seen from a new side; the box is grown by a voxel for it, as the overlap
+is counted with a voxel's tolerance: the wrist camera saw only the lower edge of a book's far side,
+whose voxels reached one beyond the box of the book seen from the front. A thing nested in a same-label thing (a shell over a smaller
 box) is never seen while the outer stands over it: once the outer is lifted away it no longer
 surrounds it.
 
@@ -64,7 +66,8 @@ def overlap(detection: Detection, inst: Instance, config: MemoryConfig,
     box = _box_iou(seen, inst.bounds)
     passing = [value for value, threshold in ((iou, config.merge_iou), (containment, config.merge_containment),
                                               (box, config.merge_box_iou)) if value >= threshold]
-    around = inst.bounds if family is None else family
+    lo, hi = inst.bounds if family is None else family
+    around = (lo - config.voxel_m, hi + config.voxel_m)  # a face seen edge-on quantises a voxel beyond
     if _volume(seen) <= NESTED_VOLUME * _volume(around) and _share_within(seen, around) >= NESTED_SHARE:
         passing.append(NESTED_SHARE)
     return max(passing, default=0.0)
