@@ -70,7 +70,6 @@ class Picks:
         self.body = body
         self.idle_toward_robot_m = idle_toward_robot_m
         self.parts = parts
-        self.drive = parts.drive
         self.away: dict[int, Away] = {}
         self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
 
@@ -124,7 +123,7 @@ class Picks:
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
         lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
         spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
-        self.drive(Pose2D(stand_x, edge_y, body.home.yaw))
+        self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
         places = spots + np.array([0.0, 0.0, top[2] - box[0][2]])
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
                           surface_z=float(spots[0, 2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
@@ -155,7 +154,7 @@ class Picks:
         if away is None:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert body.home is not None  # set by the look before the pick away
-        self.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
+        self.parts.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
         result = self._put_back(obj, away)
         if not result.ok and result.steps_done:
             found = self._find_again(obj, away)

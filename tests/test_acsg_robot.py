@@ -20,6 +20,15 @@ from worlds.bus.link import WorldLink
 pytestmark = pytest.mark.slow
 
 
+def _explored_and_put_back(task: str, seed: int) -> dict:
+    """The scene's exploration row, asserted to have no action failed, to have succeeded and to
+    have left the scene as it was found."""
+    row = run_robot(task, seed)
+    assert row["failed_actions"] == []
+    assert row["success"] and row["state_recovered"]
+    return row
+
+
 def test_a_door_scene_is_explored_to_its_ground_truth_graph_and_put_back() -> None:
     row = run_robot("door-only", 0)
     assert row["failed_actions"] == []
@@ -42,17 +51,13 @@ def test_what_a_drawer_hides_is_found_and_every_drawer_is_shut_again() -> None:
 def test_things_picked_away_are_put_down_out_of_the_arm_s_way_to_the_door_they_hid() -> None:
     # A milk carton and a jar stand before the cabinet's door. Put down beside the lane to the
     # handle, the carton held the wrist back on its way to the handle, and the door stayed shut.
-    row = run_robot("occlusion", 3)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["object_recovery"] == 1.0 and row["state_recovered"]
+    assert _explored_and_put_back("occlusion", 3)["object_recovery"] == 1.0
 
 
 def test_bottles_standing_close_together_are_picked_without_touching_each_other() -> None:
     # Closing around a bottle, with 5 mm to spare either side of the fingers, a finger came down
     # on the bottle beside it; the fingertips now rest on the bottle's top instead.
-    row = run_robot("occlusion", 4)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["object_recovery"] == 1.0 and row["state_recovered"]
+    assert _explored_and_put_back("occlusion", 4)["object_recovery"] == 1.0
 
 
 def test_a_cup_below_the_head_camera_s_view_is_seen_from_further_back() -> None:
@@ -91,9 +96,7 @@ def test_a_corner_of_a_cabinet_seen_apart_is_no_second_cabinet() -> None:
     # door-only 1003 (a tuning seed): the wrist camera's first looks saw a corner of the cabinet's
     # plinth beside its door, apart from the top the head camera saw; it was a second cabinet in
     # the graph, which the robot was asked to open (a cabinet with no door of its own), GED 4.
-    row = run_robot("door-only", 1003)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["graph_edit_distance"] == 0.0 and row["state_recovered"]
+    assert _explored_and_put_back("door-only", 1003)["graph_edit_distance"] == 0.0
 
 
 def test_memory_ids_are_put_in_the_ground_truth_s_terms_by_their_last_segmentation_id() -> None:
@@ -132,40 +135,30 @@ def test_a_wide_box_is_put_down_where_a_door_already_shut_again_swung() -> None:
     # recursive 1004 (tuning-wide): a 32 cm shell before a cabinet whose door the robot had opened
     # and shut again; the door's sweep and the lane to its handle were still kept clear, and no
     # spot on the table within reach was left for the shell.
-    row = run_robot("recursive", 1004)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["state_recovered"]
+    _explored_and_put_back("recursive", 1004)
 
 
 def test_the_way_to_a_thing_put_down_keeps_the_hand_off_it_and_its_neighbours() -> None:
     # occlusion 1019 (tuning-wide): the free move to high above a milk carton put down by the
     # table's edge swept a finger across the carton itself, and the carton was never put back.
-    row = run_robot("occlusion", 1019)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["state_recovered"]
+    _explored_and_put_back("occlusion", 1019)
 
 
 def test_a_shell_is_put_back_around_the_one_it_covered() -> None:
     # recursive 1009 (tuning-wide): seen anew where it had been put down, the outer shell's top
     # moved 1.7 cm in the memory; put back by that top, it came down on the inner shell's wall,
     # 5 cm up, and was taken for a new box.
-    row = run_robot("recursive", 1009)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["state_recovered"]
+    _explored_and_put_back("recursive", 1009)
 
 
 def test_drawers_pushed_shut_stand_shut() -> None:
     # drawer-only 1021 (tuning-wide): pushed back to where their handles were seen shut, three
     # drawers stood 9-11 mm out, more than the 5 % of their travel that counts as shut.
-    row = run_robot("drawer-only", 1021)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["state_recovered"]
+    _explored_and_put_back("drawer-only", 1021)
 
 
 def test_a_drawer_pushed_past_where_it_was_seen_shut_is_remembered_shut() -> None:
     # drawer-only 1053 (tuning-wide): the hand pushing a drawer shut went 2 cm past where the drawer
     # was seen shut; the memory carried the drawer as far, and its front, seen again where it stood,
     # became a second drawer.
-    row = run_robot("drawer-only", 1053)
-    assert row["failed_actions"] == []
-    assert row["success"] and row["graph_edit_distance"] == 0.0 and row["state_recovered"]
+    assert _explored_and_put_back("drawer-only", 1053)["graph_edit_distance"] == 0.0

@@ -24,7 +24,7 @@ from worlds.robot_arm import STOWED, WRIST_CAMERA_FRAME, arm_spec, homebot_urdf
 from worlds.scene import urdf_file
 from worlds.sim import World
 from worlds.tabletop import tabletop_variant
-from worlds.tabletop_scene import TabletopScene
+from worlds.tabletop_scene import TabletopObject, TabletopScene
 
 SPEC = arm_spec()
 #: sha256 of the head camera's frames (rgb, depth, seg, camera pose, labels) rendered by the code
@@ -119,6 +119,11 @@ def _line(world: World, ik: _IK, q: np.ndarray, points: list[np.ndarray], rotati
         result = _go(world, q, speed)
         assert result.contacts == [], result.contacts
     return q
+
+
+def _with_moved(scene: TabletopScene, moved: dict[int, TabletopObject]) -> TabletopScene:
+    """The scene with each object of ``moved`` (instance id -> the object, moved) in place of its own."""
+    return dataclasses.replace(scene, objects=tuple(moved.get(obj.instance_id, obj) for obj in scene.objects))
 
 
 def _tcp(world: World) -> np.ndarray:
@@ -282,7 +287,7 @@ def test_a_picked_object_moves_with_the_hand_and_stays_where_it_is_put_down() ->
     scene = tabletop_variant("drawer-only", 6)
     can = next(obj for obj in scene.objects if obj.category == "can")
     near = dataclasses.replace(can, center=(0.0, -0.22, can.center[2]))  # within the arm's top-down reach
-    scene = dataclasses.replace(scene, objects=tuple(near if obj is can else obj for obj in scene.objects))
+    scene = _with_moved(scene, {can.instance_id: near})
     world = World(CameraConfig())
     ik = _IK(world.start_tabletop(scene))
     try:
@@ -320,7 +325,7 @@ def test_an_open_bottomed_box_put_back_over_what_it_covered_stands_on_its_walls(
     assert [obj.shape for obj in nest] == ["shell", "shell", "box"]
     shift = np.array([0.0, -0.22, 0.0]) - [*nest[0].center[:2], 0.0]  # within the arm's top-down reach
     moved = {obj.instance_id: dataclasses.replace(obj, center=tuple(np.add(obj.center, shift))) for obj in nest}
-    scene = dataclasses.replace(scene, objects=tuple(moved.get(obj.instance_id, obj) for obj in scene.objects))
+    scene = _with_moved(scene, moved)
     outer = moved[3]
     world = World(CameraConfig())
     ik = _IK(world.start_tabletop(scene))

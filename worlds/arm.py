@@ -50,15 +50,8 @@ def _matrix(position: Iterable[float], orientation: Iterable[float]) -> np.ndarr
     return pose
 
 
-def position_quaternion(pose: np.ndarray) -> tuple[list[float], list[float]]:
-    """(position, quaternion xyzw) of a 4x4 rigid transform, as PyBullet takes them.
-
-    Args:
-        pose: the 4x4 transform.
-
-    Returns:
-        Its position and its unit quaternion (x, y, z, w).
-    """
+def _position_quaternion(pose: np.ndarray) -> tuple[list[float], list[float]]:
+    """(position, quaternion xyzw) of a 4x4 rigid transform."""
     r = pose[:3, :3]
     w = math.sqrt(max(0.0, 1.0 + r[0, 0] + r[1, 1] + r[2, 2])) / 2
     x = math.copysign(math.sqrt(max(0.0, 1.0 + r[0, 0] - r[1, 1] - r[2, 2])) / 2, r[2, 1] - r[1, 2])
@@ -339,7 +332,7 @@ class Arm:
             other = p.getLinkState(body, link, computeForwardKinematics=True, physicsClientId=self.client)
             # constraint frames are relative to each link's centre of mass (getLinkState's first pose)
             relative = np.linalg.inv(_matrix(hand[0], hand[1])) @ _matrix(other[0], other[1])
-            position, orientation = position_quaternion(relative)
+            position, orientation = _position_quaternion(relative)
             self._constraint = p.createConstraint(
                 self.body, self.hand, body, link, p.JOINT_FIXED, [0, 0, 0], position, [0, 0, 0],
                 orientation, [0, 0, 0, 1], physicsClientId=self.client,
@@ -376,5 +369,5 @@ class Arm:
         """Put a carried body back at its place in the hand (after a step, or after the base moved)."""
         if self._carry is None or self.grip is None:
             return
-        position, orientation = position_quaternion(self.link_pose(self.spec.hand_link) @ self._carry)
+        position, orientation = _position_quaternion(self.link_pose(self.spec.hand_link) @ self._carry)
         p.resetBasePositionAndOrientation(self.grip.body, position, orientation, physicsClientId=self.client)

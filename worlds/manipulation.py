@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from worlds.arm import Touch, TrajectoryRun, position_quaternion
+from worlds.arm import Touch, TrajectoryRun
 from worlds.body import RobotBody
 from worlds.stage import Stage
 from worlds.things import Label
@@ -189,19 +189,13 @@ def _settled(orientation: tuple[float, float, float, float]) -> tuple[float, flo
     """``orientation`` turned the least way that stands the body's axis nearest the vertical exactly
     upright (or upside down): how a thing let go of a little tilted comes to rest on a flat top."""
     rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
-    k = int(np.argmax(np.abs(rotation[2])))
-    axis = rotation[:, k]
-    upright = np.array([0.0, 0.0, math.copysign(1.0, axis[2])])
-    turn = np.cross(axis, upright)
-    sine, cosine = float(np.linalg.norm(turn)), float(axis @ upright)
+    axis = rotation[:, int(np.argmax(np.abs(rotation[2])))]
+    turn = np.cross(axis, [0.0, 0.0, math.copysign(1.0, axis[2])])
+    sine = float(np.linalg.norm(turn))
     if sine < 1e-12:
         return orientation
-    turn /= sine
-    skew = np.array([[0.0, -turn[2], turn[1]], [turn[2], 0.0, -turn[0]], [-turn[1], turn[0], 0.0]])
-    righting = np.eye(3) + sine * skew + (1.0 - cosine) * skew @ skew
-    pose = np.eye(4)
-    pose[:3, :3] = righting @ rotation
-    return tuple(position_quaternion(pose)[1])  # type: ignore[return-value]
+    righting = p.getQuaternionFromAxisAngle((turn / sine).tolist(), math.asin(min(sine, 1.0)))
+    return p.multiplyTransforms((0.0, 0.0, 0.0), righting, (0.0, 0.0, 0.0), orientation)[1]
 
 
 #: How finely (m) a falling object's resting height is found, and the steps it first falls by.

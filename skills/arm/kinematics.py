@@ -108,7 +108,7 @@ class ArmKinematics:
         self._frame = self.model.getFrameId(tcp_frame)
         self._joint_ids = [self.model.getJointId(n) for n in self.joint_names]
         self._q_index = np.array([self.model.idx_qs[j] for j in self._joint_ids])
-        self._v_index = np.array([self.model.idx_vs[self.model.getJointId(n)] for n in self.joint_names])
+        self._v_index = np.array([self.model.idx_vs[j] for j in self._joint_ids])
         self._qm = pin.neutral(self.model)
         self.lower = self.model.lowerPositionLimit[self._q_index].copy()
         self.upper = self.model.upperPositionLimit[self._q_index].copy()

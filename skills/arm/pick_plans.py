@@ -99,21 +99,15 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                        np.vstack([near, box_points(top - size[2] / 2 * UP, size)]))
     builder = PlanBuilder(arm, here, base_pose, surface_z, around)
     failures: list[str] = []
-    toward = np.array([*(np.asarray(base_pose[:2], dtype=float) - top[:2]), 0.0])
-    toward /= max(float(np.linalg.norm(toward)), 1e-9)
+    toward = _toward(base_pose, top)
     grasps = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth)
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first); else, as without such checks, to the first place, the first
     # grasp that reaches at all.
-    routes: list[tuple[_Route, bool]] = []
-    for index, place in enumerate(places):
-        ways = _ways(grasps, top, place, lift_m, clearance_m, keep_off)
-        to_place = np.array([*(np.asarray(base_pose[:2], dtype=float) - place[:2]), 0.0])
-        to_place /= max(float(np.linalg.norm(to_place)), 1e-9)
-        routes += [(route, True) for route in _clear_routes(ways, lift_m, size, keep_off, toward, to_place)]
-        if index == 0:
-            plain = [(route, False) for route in _plain_routes(ways, lift_m, keep_off)]
-    routes += plain
+    ways_to = [_ways(grasps, top, place, lift_m, clearance_m, keep_off) for place in places]
+    routes = [(route, True) for place, ways in zip(places, ways_to, strict=True)
+              for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
+    routes += [(route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off)]
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release
         carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
@@ -140,6 +134,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 "grasp_depth_m": way.depth, "grasp": way.name, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
+    """The level unit vector from ``point`` towards the base."""
+    toward = np.array([*(np.asarray(base_pose[:2], dtype=float) - point[:2]), 0.0])
+    return toward / max(float(np.linalg.norm(toward)), 1e-9)
 
 
 def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, lift_m: float, clearance_m: float,
@@ -232,10 +232,10 @@ def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np
                     for inward in BEFORE_M[:2] if there else (0.0,):
                         routes.append(_Route(way, grasp, release, lift, tuple(approach), out * toward,
                                              inward * to_place))
-    open_routes = [route for route in routes if not np.any(route.out) and not np.any(route.inward)
-                   and route.way.name != "fingertips-on-near-edge"]
-    return (open_routes + [route for route in routes if not any(route is other for other in open_routes)]
-            )[:CLEAR_ROUTES]
+    def confined(route: _Route) -> bool:  # open routes first, stable: else in the order built
+        return bool(np.any(route.out) or np.any(route.inward) or route.way.name == "fingertips-on-near-edge")
+
+    return sorted(routes, key=confined)[:CLEAR_ROUTES]
 
 
 def _plain_routes(ways: list[Any], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
