@@ -162,3 +162,11 @@ def test_a_drawer_pushed_past_where_it_was_seen_shut_is_remembered_shut() -> Non
     # was seen shut; the memory carried the drawer as far, and its front, seen again where it stood,
     # became a second drawer.
     assert _explored_and_put_back("drawer-only", 1053)["graph_edit_distance"] == 0.0
+
+
+def test_a_wide_box_is_carried_round_a_cabinet_standing_between_its_place_and_its_idle_spot() -> None:
+    # recursive 1013 (tuning-wide): carried straight across to its idle spot beside a cabinet, a
+    # 28 cm shell would sweep the cabinet's front corner; no straight carry was clear, the unchecked
+    # one ran the hand into the cabinet's door, and the shell was let go of on the way.
+    _explored_and_put_back("recursive", 1013)
+

@@ -47,6 +47,8 @@ LIFT_SPARE_M, LOW_LIFT_M = 0.015, 0.05
 #: Grasps of the middle of an object tried for a chain clear all the way, best first, before the
 #: grasps of its near edge and settling for one that merely reaches; routes tried so at the most.
 CLEAR_GRASPS, CLEAR_ROUTES = 4, 48
+#: How far (m) a carry in the open goes round by the robot's side when straight across is not clear.
+DETOUR_M = 0.25
 #: How far over the pose above an object (m) a board makes the pick a confined one (`_confined`).
 CONFINED_M = 0.3
 
@@ -209,7 +211,8 @@ def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
     In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
-    before the pose above.
+    before the pose above; carried straight across, or, after every straight route, round by the
+    robot's side (`_detours`).
     Where a board stands close over the object or its place (`_confined`: a box inside a cabinet)
     a hand straight down has no room for its wrist: the top's near edge is grasped, the hand
     leaning back towards the robot, the steepest first; the object is lifted only as high as
@@ -228,14 +231,24 @@ def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np
         for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
             approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
             for approach in approaches:
-                for out in BEFORE_M[:2] if here else (0.0,):
-                    for inward in BEFORE_M[:2] if there else (0.0,):
-                        routes.append(_Route(way, grasp, release, lift, tuple(approach), out * toward,
-                                             inward * to_place))
+                for out, inward in _detours(here, there):
+                    routes.append(_Route(way, grasp, release, lift, tuple(approach), out * toward,
+                                         inward * to_place))
     def confined(route: _Route) -> bool:  # open routes first, stable: else in the order built
         return bool(np.any(route.out) or np.any(route.inward) or route.way.name == "fingertips-on-near-edge")
 
     return sorted(routes, key=confined)[:CLEAR_ROUTES]
+
+
+def _detours(here: bool, there: bool) -> list[tuple[float, float]]:
+    """How far (m) to draw the object out towards the robot after the lift, and to bring it in from
+    before its place: out of and into storage by each of `BEFORE_M`; in the open, straight across
+    first and then round by the robot's side (`DETOUR_M` out and in), clear of a cabinet that
+    stands between where a wide box is lifted and where it goes down beside it."""
+    if not (here or there):
+        return [(0.0, 0.0), (DETOUR_M, DETOUR_M)]
+    outs, ins = (BEFORE_M[:2] if here else (0.0,)), (BEFORE_M[:2] if there else (0.0,))
+    return [(out, inward) for out in outs for inward in ins]
 
 
 def _plain_routes(ways: list[Any], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
