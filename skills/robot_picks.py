@@ -34,6 +34,8 @@ from skills.robot_parts import DoorsAndDrawers
 BACK_M = 0.02
 #: A thing whose top the memory has this far across (m) from where it was put down has moved since.
 MOVED_M = 0.03
+#: How far (m) beyond the box a thing filled what it covered may show in the memory (its voxels).
+COVERED_M = 0.005
 #: Idle spots offered to a pick away, nearest first, and how far apart they lie at least (m): where
 #: the way to the nearest is blocked (a door standing open across it), the next may be clear.
 PLACES, PLACES_APART_M = 3, 0.15
@@ -180,7 +182,8 @@ class Picks:
             now = np.array([*away.placed_point[:2], now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
-                          label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
+                          label=f"{obj.label} {obj.id}",
+                          keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:
             body.memory.move(obj.id, _translation(away.grasp_point - now))
         return result
@@ -212,13 +215,23 @@ class Picks:
         self.vacated.pop(obj.id, None)
         return SkillResult(True)
 
-    def _near(self, obj: Instance) -> np.ndarray:
+    def _near(self, obj: Instance, covering: Box | None = None) -> np.ndarray:
         """The points of everything remembered but ``obj`` and the tables and counters: what the hand
         picking it and putting it down is to keep off (a bottle beside the one picked, the handle
-        beside the place it goes back to)."""
+        beside the place it goes back to).
+
+        ``covering``: the box ``obj`` filled where it goes back. What stands inside it stood under
+        it before (the clock a box was lifted off, the smaller box in the larger) and the thing is
+        put back over it, so it is not kept off: kept off, the box coming down over the clock
+        ruled out every route checked clear, and the one taken unchecked swept the box across a
+        chest's handles and pulled both its drawers open (recursive 1016 of tuning-wide)."""
         surfaces = {inst.id for inst in self.body.surfaces()}
         points = [inst.points() for inst in self.body.memory.live() if inst.id != obj.id and inst.id not in surfaces]
-        return np.vstack(points) if points else np.zeros((0, 3))
+        near = np.vstack(points) if points else np.zeros((0, 3))
+        if covering is not None and len(near):
+            lo, hi = (np.asarray(corner, dtype=float) for corner in covering)
+            near = near[~np.all((near >= lo - COVERED_M) & (near <= hi + COVERED_M), axis=1)]
+        return near
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:
