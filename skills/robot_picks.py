@@ -4,7 +4,8 @@
   the doors and drawers sweep as they open and of the lanes to their handles:
   `agent.acsg.keep_clear`), the base slid along the table's edge (the robot faces the table along
   +y, as the tabletop scenes start it) to where the arm reaches both the object and the spot
-  (`PLACE_REACH_M`), level with the object where it can;
+  (`PLACE_REACH_M`), level with the object where it can; where no place on it is free, on top of
+  a thing put out of the way before it (`stack_spot`);
 - pick back: from where it was put down to where it was.
 
 The box a thing filled before it was picked away is kept while it is away (``vacated``): what is
@@ -13,6 +14,7 @@ found there lay inside it (the Matryoshka's smaller doll).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,10 +25,10 @@ from agent.acsg.keep_clear import kept_clear
 from agent.perception.grasp_poses import top_grasp_point
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
-from skills.arm.idle_space import idle_spot, reach_along
+from skills.arm.idle_space import idle_spot, reach_along, stack_spot
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
-from skills.robot_body import RobotBody
+from skills.robot_body import RobotBody, surface_top
 from skills.robot_parts import DoorsAndDrawers
 
 #: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
@@ -77,7 +79,8 @@ class Picks:
 
     def pick_away(self, obj: Instance) -> SkillResult:
         """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
-        there is one, beyond the strip before the robot that the arm works over.
+        there is one, beyond the strip before the robot that the arm works over; where none is
+        free, on top of a thing it put out of the way before (`_on_a_thing_away`).
 
         Args:
             obj: the thing to move out of the way.
@@ -119,8 +122,13 @@ class Picks:
             spots = idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
                               allowed_means="within the arm's reach beyond the strip before the robot", **options)
         except SkillPlanError:
-            spots = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
-                              allowed_means="within the arm's reach", **options)
+            try:
+                spots = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+                                  allowed_means="within the arm's reach", **options)
+            except SkillPlanError as no_room:  # else on top of a thing put away before it
+                spots = self._on_a_thing_away(obj, extent, reachable)
+                if spots is None:
+                    raise no_room from None
         (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
         stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
         lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
@@ -128,7 +136,7 @@ class Picks:
         self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
         places = spots + np.array([0.0, 0.0, top[2] - box[0][2]])
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                          surface_z=float(spots[0, 2]), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
+                          surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:
             return SkillResult(False, result.reason)
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
@@ -136,6 +144,30 @@ class Picks:
         self.away[obj.id] = Away(top, place, extent, stand_x)
         self.vacated[obj.id] = box
         return SkillResult(True)
+
+    def _on_a_thing_away(self, obj: Instance, extent: np.ndarray, reachable: Callable[[np.ndarray], np.ndarray]
+                         ) -> np.ndarray | None:
+        """A spot on top of a thing this robot put out of the way before ``obj``, the latest first,
+        whose top holds ``obj`` whole (`stack_spot`) where the arm reaches (``reachable``): a table
+        with no free place left may still take the smaller box of a nest on the larger one lifted
+        off it (recursive 1014 of tuning-wide). That thing is done with until it goes back, and it
+        goes back after ``obj`` (the action stack puts back the last thing moved first).
+
+        Returns:
+            (1, 3): the spot (x, y, top z), or None where no such thing is.
+        """
+        memory = self.body.memory
+        live = {inst.id: inst for inst in memory.live()}
+        for thing_id in reversed(list(self.away)):
+            support = memory.get(thing_id)
+            lo, hi = support.bounds
+            if support.id not in live or bool(np.all((obj.centroid[:2] >= lo[:2]) & (obj.centroid[:2] <= hi[:2]))):
+                continue  # gone, or the object stands on it already (seen anew there, it is the one put there)
+            others = [inst.points() for inst in live.values() if inst.id not in (support.id, obj.id)]
+            spot = stack_spot(support.points(), others, extent)
+            if spot is not None and bool(reachable(spot[None, :2])[0]):
+                return spot[None, :]
+        return None
 
     def pick_back(self, obj: Instance) -> SkillResult:
         """Put ``obj``, picked away by this robot, back where it stood; when that fails after the arm

@@ -176,3 +176,9 @@ def test_a_box_goes_back_over_what_it_covered_without_touching_what_stands_besid
     # while the shell came down over it again, so no route was checked clear; the unchecked carry
     # swept the shell across a chest's handles and pulled both drawers open.
     _explored_and_put_back("recursive", 1016)
+
+
+def test_a_box_goes_on_top_of_the_one_lifted_off_it_when_the_table_is_full() -> None:
+    # recursive 1014 (tuning-wide): the outer shell put down, no place 0.34 m across was left within
+    # reach for the inner one, and what it covered was never seen.
+    assert _explored_and_put_back("recursive", 1014)["graph_edit_distance"] == 0.0

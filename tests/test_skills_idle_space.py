@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from skills.arm.idle_space import idle_spot, reach_along
+from skills.arm.idle_space import idle_spot, reach_along, stack_spot
 from skills.arm.skill_plan import SkillPlanError
 
 
@@ -74,3 +74,23 @@ def test_several_spots_come_nearest_first_and_apart() -> None:
     distances = np.linalg.norm(spots[:, :2], axis=1)
     assert list(distances) == sorted(distances) and distances[0] < 0.02
     assert min(np.linalg.norm(spots[i, :2] - spots[j, :2]) for i in range(3) for j in range(i + 1, 3)) >= 0.15
+
+
+def _box_top(centre: tuple[float, float], side: float, top: float) -> np.ndarray:
+    xs, ys = np.meshgrid(np.arange(-side / 2, side / 2 + 1e-9, 0.01), np.arange(-side / 2, side / 2 + 1e-9, 0.01))
+    walls = np.column_stack([np.full(20, centre[0] - side / 2), np.full(20, centre[1]), np.linspace(0.75, top, 20)])
+    return np.vstack([np.column_stack([xs.ravel() + centre[0], ys.ravel() + centre[1], np.full(xs.size, top)]), walls])
+
+
+def test_an_object_goes_on_a_flat_top_as_wide_as_it_and_bare() -> None:
+    box = _box_top((-0.2, -0.25), 0.32, 0.847)
+    spot = stack_spot(box, [], (0.28, 0.28, 0.07))
+    assert spot is not None
+    assert spot[:2] == pytest.approx((-0.2, -0.25), abs=0.006) and spot[2] == pytest.approx(0.847, abs=0.003)
+    assert stack_spot(box, [], (0.36, 0.28, 0.07)) is None  # wider than the top, past the overhang allowed
+    cup = np.array([[-0.15, -0.2, 0.9], [-0.15, -0.21, 0.93]])
+    assert stack_spot(box, [cup], (0.28, 0.28, 0.07)) is None  # something stands on it already
+    beside = cup + np.array([0.4, 0.0, 0.0])
+    assert stack_spot(box, [beside], (0.28, 0.28, 0.07)) is not None
+    assert stack_spot(box[:5], [], (0.1, 0.1, 0.05)) is None  # too few points to know its top
+

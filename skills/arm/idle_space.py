@@ -95,6 +95,43 @@ def idle_spot(surface_points: np.ndarray, obstacle_points: Sequence[np.ndarray],
     return spots[0] if count == 1 else spots
 
 
+def stack_spot(support_points: np.ndarray, obstacle_points: Sequence[np.ndarray], extent: Sequence[float],
+               *, overhang_m: float = 0.01) -> np.ndarray | None:
+    """Where on a flat top an object stands whole: its middle over the top's middle, where the top is
+    as wide as the object each way (less ``overhang_m`` a side) and nothing else stands on it.
+
+    A table with no free place left may still hold the object on top of another it was put down on
+    first: the smaller box of a nest on the larger one lifted off it (RoboEXP's idle space, on
+    another surface).
+
+    Args:
+        support_points: (N, 3) the supporting thing's points; its top is those within 1 cm of the
+            highest, at their mean height.
+        obstacle_points: every other thing's points: none may stand on the top.
+        extent: the object's box (dx, dy, dz).
+        overhang_m: how far (m) the object may reach past the top's seen edge on each side.
+
+    Returns:
+        (x, y, top z) of the spot, or None where the top is too small, too few points or taken.
+    """
+    points = np.asarray(support_points, dtype=float).reshape(-1, 3)
+    if len(points) < 10:
+        return None
+    band = points[points[:, 2] >= points[:, 2].max() - 0.01]
+    top = float(band[:, 2].mean())  # as a thing's top grasp point has it: where the object will rest
+    flat = band[:, :2]
+    lo, hi = flat.min(axis=0), flat.max(axis=0)
+    if np.any(np.asarray(extent, dtype=float)[:2] > hi - lo + 2 * overhang_m):
+        return None
+    for other in obstacle_points:
+        other = np.asarray(other, dtype=float).reshape(-1, 3)
+        on_it = np.all((other[:, :2] >= lo) & (other[:, :2] <= hi), axis=1) & (other[:, 2] > top + 0.005)
+        if np.any(on_it):
+            return None
+    middle = (lo + hi) / 2
+    return np.array([middle[0], middle[1], top])
+
+
 def reach_along(points_xy: np.ndarray, line_y: float, reach_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Where along a table's edge the base may stand to reach points: a pick and its put-down are
     made from one stand, one where both intervals meet.
