@@ -110,3 +110,14 @@ def test_objects_that_fit_are_grasped_around_and_wider_ones_by_their_top() -> No
     assert [round(float(math.degrees(math.acos(-g.rotation[2, 2])))) for g in edge] == [0, 0, 30, 30, 50, 50, 65, 65]
     assert all(g.rotation[0, 2] > 0 for g in edge[2:])  # the approach leans away: the wrist nearer the base
     assert all(abs(g.rotation[:, 1] @ [1.0, 0.0, 0.0]) < 1e-9 for g in edge)  # closing across the line of sight
+
+
+def test_fingers_close_along_the_line_of_sight_only_around_a_voxel_more_than_the_memory_saw() -> None:
+    # occlusion 1006 (tuning-wide): a 7 cm shampoo bottle remembered 7 cm across and 6 cm deep; the
+    # fingers, 6.4 cm apart, closed along its depth and one came down on the bottle.
+    point, base = np.array([0.26, 0.0, 0.95]), (0.26, -0.7, 0.0)  # seen from straight before it
+    bottle = object_grasps(np.array([0.07, 0.06, 0.2]), point, base, 0.064, 0.02)
+    assert bottle and all(g.name == "fingertips-on-top" for g in bottle)
+    wider = object_grasps(np.array([0.07, 0.06, 0.2]), point, base, 0.071, 0.02)  # 6 cm + a voxel fits
+    assert wider and all(g.name == "fingers-around" for g in wider)
+    assert any(abs(g.rotation[:, 1] @ [0.0, 1.0, 0.0]) == pytest.approx(1.0) for g in wider)  # along its depth
