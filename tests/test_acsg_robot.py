@@ -182,3 +182,11 @@ def test_a_box_goes_on_top_of_the_one_lifted_off_it_when_the_table_is_full() -> 
     # recursive 1014 (tuning-wide): the outer shell put down, no place 0.34 m across was left within
     # reach for the inner one, and what it covered was never seen.
     assert _explored_and_put_back("recursive", 1014)["graph_edit_distance"] == 0.0
+
+
+def test_a_box_with_no_clear_way_out_of_its_drawer_is_left_there_and_the_chest_as_it_was() -> None:
+    # recursive 1018 (tuning-wide): no route out of the open drawer kept the wrist off the board
+    # over it; the unchecked one pushed the chest's drawers 10 and 27 cm in past their end stops.
+    row = run_robot("recursive", 1018)
+    assert any("none is taken unchecked" in failed for failed in row["failed_actions"]), row["failed_actions"]
+    assert row["state_recovered"]

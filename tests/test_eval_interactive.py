@@ -81,6 +81,8 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
     ("stopped on contact with bowl 14 (panda_hand)", "contact stop"),
     ("IK: above unreachable: did not converge: best error 15.0 cm / 3.1 deg", "IK no solution"),
     ("idle spot: no free place 0.28 m across on the surface at 0.750 m", "no idle space"),
+    ("pick: no route clear of what stands near, and none is taken unchecked under a board close over the "
+     "object or its place", "no clear route in storage"),
     ("the base could not reach (0.12, -0.80, 90°): it touched door", "base unreachable"),
     ("door 7 has no handle the robot has seen", "no handle points"),
     ("the gripper closed on nothing (0 mm between the fingers)", "grasp closed on nothing"),

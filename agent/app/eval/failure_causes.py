@@ -22,6 +22,7 @@ ACTION_CAUSES = (
     ("base unreachable", ("the base could not reach",)),
     ("contact stop", ("stopped on contact",)),
     ("IK no solution", ("IK:",)),
+    ("no clear route in storage", ("none is taken unchecked",)),
     ("no idle space", ("idle spot", "no table or counter")),
     ("no handle points", ("has no handle the robot has seen", "points, need at least")),
     ("grasp closed on nothing", ("closed on nothing",)),
