@@ -157,14 +157,16 @@ class Picks:
             (1, 3): the spot (x, y, top z), or None where no such thing is.
         """
         memory = self.body.memory
-        live = {inst.id: inst for inst in memory.live()}
+        points = {inst.id: inst.points() for inst in memory.live() if inst.id != obj.id}
         for thing_id in reversed(list(self.away)):
             support = memory.get(thing_id)
+            if support.id not in points:
+                continue  # gone
             lo, hi = support.bounds
-            if support.id not in live or bool(np.all((obj.centroid[:2] >= lo[:2]) & (obj.centroid[:2] <= hi[:2]))):
-                continue  # gone, or the object stands on it already (seen anew there, it is the one put there)
-            others = [inst.points() for inst in live.values() if inst.id not in (support.id, obj.id)]
-            spot = stack_spot(support.points(), others, extent)
+            if bool(np.all((obj.centroid[:2] >= lo[:2]) & (obj.centroid[:2] <= hi[:2]))):
+                continue  # the object stands on it already: seen anew there, it is the one put there
+            others = [seen for key, seen in points.items() if key != support.id]
+            spot = stack_spot(points[support.id], others, extent)
             if spot is not None and bool(reachable(spot[None, :2])[0]):
                 return spot[None, :]
         return None
