@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
 
+from agent.acsg.from_memory import Box
 from agent.observation import Observation
 from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
@@ -234,6 +235,29 @@ class RobotBody:
         """
         surface = self.surface(under, reach_m)
         return None if surface is None else surface_top(surface)
+
+    def points_near(self, leave_out: Collection[int], outside: Sequence[Box] = (), margin_m: float = 0.0
+                    ) -> np.ndarray:
+        """The points of everything remembered but the tables and counters (what the arm works
+        over, kept above by the plans' surface) and the instances ``leave_out`` (what it works on):
+        what the arm is to keep off.
+
+        Args:
+            leave_out: ids of instances whose points are not wanted.
+            outside: boxes (lo, hi) whose points, within ``margin_m``, are not wanted either (what
+                stood under a thing that goes back over it, what stands in a drawer).
+            margin_m: how far beyond a box its points may show (the memory's voxels).
+
+        Returns:
+            (N, 3) world points.
+        """
+        surfaces = {inst.id for inst in self.surfaces()}
+        points = [inst.points() for inst in self.memory.live() if inst.id not in leave_out and inst.id not in surfaces]
+        near = np.vstack(points) if points else np.zeros((0, 3))
+        for lo, hi in outside:
+            if len(near):
+                near = near[~np.all((near >= np.asarray(lo) - margin_m) & (near <= np.asarray(hi) + margin_m), axis=1)]
+        return near
 
     def remembered(self, records: dict[int, Record], inst: Instance) -> Record | None:
         """What ``records`` holds for ``inst``, under its id or an id the memory has since merged into

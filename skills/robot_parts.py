@@ -49,6 +49,9 @@ SEEN_PART_M = 0.25
 SEEN_FIT_M = 0.03
 #: A part a failed open left standing open by more than this (m, rad) is pushed shut again.
 AJAR = {"drawer": 0.005, "door": math.radians(2.0)}
+#: How far (m) beyond the box of the piece a part belongs to, and of the part, their points and what
+#: stands in them may show in the memory: two voxels.
+PIECE_MARGIN_M = 0.02
 
 
 @dataclass(frozen=True)
@@ -240,7 +243,36 @@ class DoorsAndDrawers:
                         hold: bool) -> ArmResult:
         return self.body.run(f"open_{geometry.kind}", geometry=geometry, amount=amount,
                              surface_z=self.body.surface_z(geometry.handle_point), label=f"{part.label} {part.id}",
-                             hold=hold)
+                             hold=hold, keep_off=self.near(part))
+
+    def near(self, part: Instance) -> np.ndarray:
+        """The points of what stands near a door or drawer, for the arm to keep off while it opens or
+        closes it: everything remembered but the piece it belongs to with all that piece's parts
+        and handles, and what stands inside that piece or inside the part's box raised to the
+        piece's top (the things in an open drawer). A box standing before a low drawer is kept
+        off: the forearm came down on one while the hand pulled the drawer, and let go of the
+        handle 4.4 cm out (recursive 1022 of tuning-wide).
+
+        Args:
+            part: the door or drawer.
+
+        Returns:
+            (N, 3) world points.
+        """
+        memory = self.body.memory
+        parent = memory.instances.get(part.parent) if part.parent is not None else None
+        piece = parent if parent is not None and not parent.gone else part
+        family, todo = set(), [piece.id, part.id]
+        while todo:
+            inst = memory.get(todo.pop())
+            if inst.id not in family:
+                family.add(inst.id)
+                todo.extend(inst.children)
+        boxes = [box for box in (piece.bounds, part.bounds) if np.all(np.isfinite(box[0]))]
+        if len(boxes) == 2:
+            lo, hi = boxes[1]
+            boxes[1] = (lo, np.r_[hi[:2], max(hi[2], boxes[0][1][2])])
+        return self.body.points_near(family, boxes, PIECE_MARGIN_M)
 
     def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
                       moved: float = 0.0) -> float:
@@ -306,7 +338,7 @@ class DoorsAndDrawers:
             self.drive(opened.stand)
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
-                          held=opened.held)
+                          held=opened.held, keep_off=self.near(part))
         # A drawer is pushed on past where it was seen shut until it meets its end stop, and the hand
         # may go on a little further than the part; the memory holds a shut part where it was seen shut.
         left = opened.amount if result.achieved is None else max(result.achieved, 0.0)

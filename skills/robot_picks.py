@@ -259,13 +259,7 @@ class Picks:
         put back over it, so it is not kept off: kept off, the box coming down over the clock
         ruled out every route checked clear, and the one taken unchecked swept the box across a
         chest's handles and pulled both its drawers open (recursive 1016 of tuning-wide)."""
-        surfaces = {inst.id for inst in self.body.surfaces()}
-        points = [inst.points() for inst in self.body.memory.live() if inst.id != obj.id and inst.id not in surfaces]
-        near = np.vstack(points) if points else np.zeros((0, 3))
-        if covering is not None and len(near):
-            lo, hi = (np.asarray(corner, dtype=float) for corner in covering)
-            near = near[~np.all((near >= lo - COVERED_M) & (near <= hi + COVERED_M), axis=1)]
-        return near
+        return self.body.points_near({obj.id}, () if covering is None else (covering,), COVERED_M)
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

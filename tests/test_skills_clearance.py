@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from skills.arm.arm_model import READY
-from skills.arm.clearance import LINK_RADIUS_M, Carried, Clearance, box_points, link_spheres
+from skills.arm.clearance import CLEARANCE_M, LINK_RADIUS_M, Carried, Clearance, box_points, link_spheres
 from skills.arm.frames import base_transform
 from skills.arm.planner import ArmPlanner
 from worlds.robot import CameraConfig
@@ -53,6 +53,26 @@ def test_points_beside_a_link_are_touched_and_points_away_from_it_are_not(planne
     away = elbow + np.array([[0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]])
     assert Clearance(planner, base_transform(BASE), obstacles=away).problem(q) is None
     assert Clearance(planner, base_transform(BASE), obstacles=beside[:2]).problem(q) is None  # noise
+
+
+def test_the_forearm_is_checked_where_it_turns_aside_of_the_elbow(planner: ArmPlanner) -> None:
+    # The forearm runs 8 cm aside of the elbow's axis, then 38 cm along to the wrist: checked along
+    # the straight line between the two, a box at the elbow's side of the forearm went unseen.
+    q = np.array(READY)
+    first = planner.lift_index + 1
+    skeleton = planner.kin.skeleton(q, first)
+    elbow, corner, wrist = skeleton[3], skeleton[4], skeleton[5]
+    assert np.linalg.norm(corner - elbow) == pytest.approx(0.0825, abs=1e-4)
+    assert np.linalg.norm(wrist - corner) == pytest.approx(0.384, abs=1e-4)
+    assert (corner - elbow) @ (wrist - corner) == pytest.approx(0.0, abs=1e-6)  # a right angle
+    base = base_transform(BASE)
+    line = wrist - elbow
+    out = corner - elbow - ((corner - elbow) @ line) / (line @ line) * line  # away from the straight line
+    world = base[:3, :3] @ (corner + 0.06 * out / np.linalg.norm(out)) + base[:3, 3]
+    box = world + np.array([[0.0, 0.0, 0.0], [0.005, 0.0, 0.0], [0.0, 0.005, 0.0]])
+    assert "(3 points)" in (Clearance(planner, base, obstacles=box).problem(q) or "")
+    straight = link_spheres(np.array([elbow, wrist])) @ base[:3, :3].T + base[:3, 3]
+    assert np.linalg.norm(straight[:, None] - box[None], axis=2).min() > LINK_RADIUS_M + CLEARANCE_M
 
 
 def test_a_carried_box_reaching_up_to_the_forearm_is_touched(planner: ArmPlanner) -> None:

@@ -12,7 +12,7 @@ from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from agent.perception.part_motion import moved_geometry
 from skills.arm.arm_model import READY
-from skills.arm.clearance import Clearance
+from skills.arm.clearance import Clearance, box_points
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
 from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
@@ -146,6 +146,35 @@ def test_closing_retraces_the_opening_from_where_the_part_stands(planner: ArmPla
                                        geometry_is_open=True, surface_z=SURFACE)
         again = next(step for step in seen_open.steps if step.part_motion is not None)
         assert _close_pose(_tcp(planner, again.samples[-1]), shut, 0.003, 1.5)
+
+
+def _touching(planner: ArmPlanner, plan: SkillPlan, points: np.ndarray) -> list[str]:
+    """The moves of a part's chain (past the free move to it) along which the arm or the hand
+    would touch ``points``."""
+    clearance = Clearance(planner, base_transform(BASE), SURFACE, points)
+    return [step.name for step in plan.steps if step.kind == "move" and not step.name.startswith("to the")
+            and clearance.path_problem(step.samples, every=2, hand=True) is not None]
+
+
+def test_a_part_is_opened_and_closed_with_the_arm_clear_of_a_box_standing_before_it(planner: ArmPlanner) -> None:
+    # recursive 1022 (tuning-wide): the forearm came down on a box standing before a low drawer
+    # while the hand pulled it, and let go of the handle 4.4 cm out.
+    geometry = _drawer(height=0.86)
+    box = box_points(np.array([0.4, -0.35, SURFACE + 0.05]), np.array([0.1, 0.1, 0.1]))
+    unchecked = planner.plan_open(np.array(STOWED), BASE, geometry, 0.2, surface_z=SURFACE)
+    assert "approach the drawer handle" in _touching(planner, unchecked, box)
+    plan = planner.plan_open(np.array(STOWED), BASE, geometry, 0.2, surface_z=SURFACE, keep_off=box)
+    _check_runnable(plan, np.array(STOWED))
+    assert plan.info["clear"] and _touching(planner, plan, box) == []
+    pull = next(step for step in plan.steps if step.part_motion is not None)
+    assert pull.part_motion.opening(_tcp(planner, pull.samples[-1])[:3, 3]) == pytest.approx(0.2, abs=0.003)
+    closing = planner.plan_close(plan.final_q, BASE, geometry, 0.2, surface_z=SURFACE, keep_off=box)
+    _check_runnable(closing, plan.final_q)
+    assert closing.info["clear"] and _touching(planner, closing, box) == []
+    # where no posture keeps clear (a box as high as the handle right before it), one that reaches
+    wall = box_points(np.array([0.3, -0.25, SURFACE + 0.08]), np.array([0.1, 0.1, 0.16]))
+    settled = planner.plan_open(np.array(STOWED), BASE, geometry, 0.2, surface_z=SURFACE, keep_off=wall)
+    assert not settled.info["clear"] and _touching(planner, settled, wall)
 
 
 def test_planning_errors_name_the_stage_and_the_target(planner: ArmPlanner) -> None:

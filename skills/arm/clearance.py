@@ -5,8 +5,10 @@ the rest of the arm, from the shoulder to the wrist, moves wherever IK and joint
 it. Lowering a box close before the robot took the elbow down onto the table, which held the
 arm back 13 cm short of where the box was to go; a free move into a cabinet swept the forearm
 through the door standing open beside it and pushed it shut. `Clearance` says, for one posture,
-what the links would touch: the links are spheres strung along the segments between the origins
-of successive revolute joints (`LINK_RADIUS_M` round: the Panda's links are ~12 cm thick), the
+what the links would touch: the links are spheres strung along the arm's skeleton, the origins
+of successive revolute joints and the corners where a link turns between two of them
+(`skills.arm.kinematics.ArmKinematics.skeleton`; `LINK_RADIUS_M` round: the Panda's links are
+~12 cm thick), the
 table is the surface the plan works over, what stands near is the memory's points, and what the
 hand carries is a box fixed to the TCP. The segment from the last joint to the TCP is the hand's,
 left to its boxes.
@@ -40,19 +42,19 @@ SUPPORT_M = 0.02
 TOUCHING_POINTS = 3
 
 
-def link_spheres(origins: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarray:
-    """Sphere centres along the segments between successive joint origins.
+def link_spheres(skeleton: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarray:
+    """Sphere centres along the segments between successive points of the arm's skeleton.
 
     Args:
-        origins: (k, 3) joint origins along the chain, shoulder first.
+        skeleton: (k, 3) points along the chain, shoulder first.
         step_m: the most the centres lie apart along a segment.
 
     Returns:
-        (M, 3) centres: each origin, and points between successive ones.
+        (M, 3) centres: each point, and points between successive ones.
     """
-    origins = np.asarray(origins, dtype=float)
-    centres = [origins[:1]]
-    for start, end in zip(origins[:-1], origins[1:]):
+    skeleton = np.asarray(skeleton, dtype=float)
+    centres = [skeleton[:1]]
+    for start, end in zip(skeleton[:-1], skeleton[1:]):
         count = max(1, math.ceil(float(np.linalg.norm(end - start)) / step_m))
         centres.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
     return np.vstack(centres)
@@ -157,8 +159,7 @@ class Clearance:
         self.tree = cKDTree(points) if points is not None and len(points) else None
         self.radius = radius_m
         self.clearance = clearance_m
-        first = 0 if arm.lift_index is None else arm.lift_index + 1
-        self._chain = slice(first, None)  # the revolute joints: the lift's origin sits in the base
+        self._first = 0 if arm.lift_index is None else arm.lift_index + 1  # the lift's origin sits in the base
 
     def spheres(self, q: np.ndarray) -> np.ndarray:
         """The links' sphere centres (world) for joint positions ``q``.
@@ -169,8 +170,8 @@ class Clearance:
         Returns:
             (M, 3) centres.
         """
-        origins = self.arm.kin.joint_origins(q)[self._chain]
-        return link_spheres(origins @ self.base[:3, :3].T + self.base[:3, 3])
+        skeleton = self.arm.kin.skeleton(q, self._first)
+        return link_spheres(skeleton @ self.base[:3, :3].T + self.base[:3, 3])
 
     def problem(self, q: np.ndarray, carried: Carried | None = None, hand: bool = False) -> str | None:
         """What the links would touch with the arm at ``q``, in words; None when nothing.

@@ -10,7 +10,9 @@ close takes the posture its open took.
 
 Grasp variants (the hand turned half a turn about its axis, tilted about the bar:
 `skills.arm.grasps.level_grasps`) and the grasp's IK postures (structured seeds, then a few random
-restarts) are tried in turn until one chain is reachable throughout. With ``surface_z`` (a table's
+restarts) are tried in turn until one chain is reachable throughout; with ``keep_off`` (what stands
+near: `skills.arm.clearance.Clearance`), first until one along which the whole arm and the hand
+keep clear of it, and the free move to the staging pose takes a route that does. With ``surface_z`` (a table's
 top) variants whose hand would come down onto it are refused (`skills.arm.grasps.HAND_BOXES`): a
 bar less than ~9 cm above the table cannot be grasped by a Panda hand 21 cm tall across its
 fingers. A drawer's bar is then grasped from above, the fingers closed and their tips brought down
@@ -21,6 +23,7 @@ handle (``hold``); `plan_close_held` then pushes the part shut from that grasp.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -29,6 +32,8 @@ from agent.perception.part_geometry import PartGeometry
 from agent.perception.part_motion import moved_geometry
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
+from skills.arm.clearance import Clearance
+from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M, backed_off, lifted_off, searched
 from skills.arm.grasps import (
     TOUCH_SEARCH_M,
@@ -53,9 +58,13 @@ PUSH_PAST = {"drawer": 0.015}
 #: m, any joint) of where the arm is.
 HELD_MATCH_RAD = 0.05
 
+#: One grasp posture's joint waypoints: the part's path, the approach and the retreat.
+_Chain = tuple[np.ndarray, np.ndarray, np.ndarray]
+
 
 def plan_open(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
-              surface_z: float | None = None, skill: str | None = None, hold: bool = False) -> SkillPlan:
+              surface_z: float | None = None, skill: str | None = None, hold: bool = False,
+              keep_off: np.ndarray | None = None) -> SkillPlan:
     """Open a door or drawer (see the module doc).
 
     Args:
@@ -78,12 +87,12 @@ def plan_open(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeo
     """
     _check_amount(geometry, amount)
     return _plan_part(arm, q, base_pose, geometry, 0.0, float(amount), skill or f"open_{geometry.kind}", surface_z,
-                      hold)
+                      hold, keep_off)
 
 
 def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
                geometry_is_open: bool = False, surface_z: float | None = None,
-               skill: str | None = None) -> SkillPlan:
+               skill: str | None = None, keep_off: np.ndarray | None = None) -> SkillPlan:
     """Close a door or drawer that stands open, taking the posture its opening took.
 
     Args:
@@ -95,6 +104,7 @@ def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
         geometry_is_open: ``geometry`` is the part as seen open.
         surface_z: as for `plan_open`.
         skill: the plan's name (default ``close_<kind>``).
+        keep_off: as for `plan_open`.
 
     Returns:
         The plan.
@@ -105,7 +115,8 @@ def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     _check_amount(geometry, amount)
     if geometry_is_open:
         geometry = moved_geometry(geometry, -float(amount))
-    return _plan_part(arm, q, base_pose, geometry, float(amount), 0.0, skill or f"close_{geometry.kind}", surface_z)
+    return _plan_part(arm, q, base_pose, geometry, float(amount), 0.0, skill or f"close_{geometry.kind}", surface_z,
+                      keep_off=keep_off)
 
 
 def plan_close_held(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
@@ -169,7 +180,8 @@ def _retraced(ik: IKSearch, poses: list[np.ndarray], what: str, error: SkillPlan
 
 
 def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, start: float, end: float,
-               skill: str, surface_z: float | None, hold: bool = False) -> SkillPlan:
+               skill: str, surface_z: float | None, hold: bool = False,
+               keep_off: np.ndarray | None = None) -> SkillPlan:
     """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
     and (unless ``hold``) let go and back off.
 
@@ -181,7 +193,11 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     is solved from the closed grasp outwards (the grasp, then the part's path to its open end, then
     the straight lines off either end of it) and the pieces are put in the order the arm runs
     them; so closing a part takes the posture its opening took, which is known to reach along the
-    whole path.
+    whole path. With ``keep_off``, the first chain of any grasp variant along which the arm and
+    hand keep clear of it is taken (`_part_chains`, `_chain_problem`), and the free move to it
+    keeps clear too; where none does, the plan is the one made without it: the first chain that
+    reaches, its free move unchecked. What stands near is known only by the points seen of it,
+    and a posture that touches a voxel of it is still better than no plan.
     """
     what = f"{geometry.kind} handle"
     opening = end > start
@@ -196,8 +212,12 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     shut = 1 if past else 0  # the index of the pose with the part as seen shut
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
-    builder = PlanBuilder(arm, here, base_pose, surface_z)
+    near = None if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    clearance = Clearance(arm, base_transform(base_pose), surface_z, near) if near is not None and len(near) else None
+    builder = PlanBuilder(arm, here, base_pose, surface_z)  # its free move checked only for a chain checked clear
     failures: dict[str, list[str]] = {}
+    # the chain taken without the check: the first that reaches, of the first variant that has one
+    fallback: tuple[HandleGrasp, list[np.ndarray], _Chain] | None = None
     for way in (*level_grasps(path[0]), *handle_top_grasps(geometry)):
         poses = [pose @ way.offset for pose in path]
         tried = failures.setdefault(way.name, [])
@@ -205,33 +225,58 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
         if refusal:
             tried.append(refusal)
             continue
-        chain = _part_chain(ik, poses, what, opening, way.touch, tried)
-        if chain is None:
-            continue
-        swept, approach, retreat = chain
-        grasp, release = (poses[0], poses[-1]) if opening else (poses[-1], poses[0])
-        motion = PartMotion(geometry, poses[shut][:3, 3], start, end)
-        builder.free_move(f"to the pre-grasp pose of the {what}", approach[0])
-        name = f"approach the {what} from above" if way.touch else f"approach the {what}"
-        builder.grasp(way, name, approach, grasp, "handle", what)
-        builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
-                     swept, careful=True, tcp_target=release, part_motion=motion)
-        if not hold:
-            builder.let_go(what, retreat)
-        info = {"grasp_pose": grasp, "release_pose": release, "grasp": way.name, "kind": geometry.kind,
-                "start": start, "end": end, "held": hold}
-        return builder.finish(skill, info, ik)
+        for chain in _part_chains(ik, poses, what, opening, way.touch, tried):
+            if clearance is None:
+                fallback = fallback or (way, poses, chain)
+                break
+            if _chain_problem(clearance, chain) is None:
+                builder.clearance = clearance
+                return _build(builder, ik, geometry, way, poses, chain, (start, end), shut, skill, hold, clear=True)
+            fallback = fallback or (way, poses, chain)
+        if clearance is None and fallback is not None:
+            break
+    if fallback is not None:
+        return _build(builder, ik, geometry, *fallback, (start, end), shut, skill, hold, clear=False)
     raise SkillPlanError("; ".join(best_failure(tried, what) if name == "level" else
                                    f"{name}: {best_failure(tried, what)}" for name, tried in failures.items()))
 
 
-def _part_chain(ik: IKSearch, poses: list[np.ndarray], what: str, opening: bool, touch: bool,
-                failures: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def _build(builder: PlanBuilder, ik: IKSearch, geometry: PartGeometry, way: HandleGrasp, poses: list[np.ndarray],
+           chain: _Chain, travel: tuple[float, float], shut: int, skill: str,
+           hold: bool, clear: bool) -> SkillPlan:
+    """The plan of one grasp variant's chain (`_part_chains`): the free move to the staging pose,
+    the approach and grasp, the part's path from ``travel[0]`` to ``travel[1]``, and unless
+    ``hold`` letting go and backing off; ``clear`` says whether the chain was checked clear."""
+    what = f"{geometry.kind} handle"
+    start, end = travel
+    opening = end > start
+    swept, approach, retreat = chain
+    grasp, release = (poses[0], poses[-1]) if opening else (poses[-1], poses[0])
+    motion = PartMotion(geometry, poses[shut][:3, 3], start, end)
+    builder.free_move(f"to the pre-grasp pose of the {what}", approach[0])
+    name = f"approach the {what} from above" if way.touch else f"approach the {what}"
+    builder.grasp(way, name, approach, grasp, "handle", what)
+    builder.move(f"{'pull' if opening else 'push'} the {geometry.kind} {'open' if opening else 'closed'}",
+                 swept, careful=True, tcp_target=release, part_motion=motion)
+    if not hold:
+        builder.let_go(what, retreat)
+    info = {"grasp_pose": grasp, "release_pose": release, "grasp": way.name, "kind": geometry.kind,
+            "start": start, "end": end, "held": hold, "clear": clear}
+    return builder.finish(skill, info, ik)
+
+
+def _chain_problem(clearance: Clearance, chain: _Chain) -> str | None:
+    """What the arm or the hand would touch along a part's chain (every other waypoint); None for nothing."""
+    return next(filter(None, (clearance.path_problem(waypoints, every=2, hand=True) for waypoints in chain)), None)
+
+
+def _part_chains(ik: IKSearch, poses: list[np.ndarray], what: str, opening: bool, touch: bool,
+                 failures: list[str]) -> Iterator[_Chain]:
     """(the part's path, approach, retreat) joint waypoints for one grasp variant, each in the
     order the arm runs it (a touch grasp's approach goes on past the grasp, `searched`, and its
-    retreat first lifts off the bar, `lifted_off`), trying the closed grasp's IK postures in
-    turn until one reaches along the whole chain; None (with the reasons in ``failures``) when
-    none does."""
+    retreat first lifts off the bar, `lifted_off`), for each of the closed grasp's IK postures in
+    turn that reaches along the whole chain (the reasons of those that do not go to
+    ``failures``)."""
     try:
         for closed in ik.solutions(poses[0], f"grasp pose of {what}", restarts=PART_RESTARTS):
             try:
@@ -248,10 +293,9 @@ def _part_chain(ik: IKSearch, poses: list[np.ndarray], what: str, opening: bool,
             except SkillPlanError as error:
                 failures.append(str(error))
                 continue
-            return swept, approach, retreat
+            yield swept, approach, retreat
     except SkillPlanError as error:
         failures.append(str(error))
-    return None
 
 
 def _refusal(way: HandleGrasp, poses: list[np.ndarray], geometry: PartGeometry, surface_z: float | None,
