@@ -147,16 +147,30 @@ def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
     return toward / max(float(np.linalg.norm(toward)), 1e-9)
 
 
+@dataclass(frozen=True)
+class _Way:
+    """One grasp of the object to one place: the grasp, the TCP at the grasp and at the release,
+    and whether a board stands close over either, lifted `lift_m` (`_confined`)."""
+
+    grasp_way: ObjectGrasp
+    grasp: np.ndarray
+    release: np.ndarray
+    confined_here: bool
+    confined_there: bool
+
+
 def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, lift_m: float, clearance_m: float,
-          keep_off: np.ndarray | None) -> list[tuple[ObjectGrasp, np.ndarray, np.ndarray, int]]:
-    """(grasp, TCP at the grasp, TCP at the release, points touched on the way down) for each
-    grasp, those whose hand touches fewer of ``keep_off`` first (stable: else best first)."""
+          keep_off: np.ndarray | None) -> list[_Way]:
+    """Each grasp's way to ``place``, those whose hand touches fewer of ``keep_off`` coming straight
+    down onto the object and onto the place first (stable: else best first)."""
     ways = []
     for way in grasps:
         grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
-        ways.append((way, grasp, release, _touched(grasp, release, lift_m, keep_off)))
-    return sorted(ways, key=lambda entry: entry[3])
+        ways.append((_touched(grasp, release, lift_m, keep_off),
+                     _Way(way, grasp, release, _confined(shifted(grasp, lift_m * UP), keep_off),
+                          _confined(shifted(release, lift_m * UP), keep_off))))
+    return [entry for _, entry in sorted(ways, key=lambda pair: pair[0])]
 
 
 @dataclass(frozen=True)
@@ -209,7 +223,7 @@ class _Route:
         builder.free_move("to ready", builder.arm.ready, via_ready=False)
 
 
-def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
+def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
                   toward: np.ndarray, to_place: np.ndarray) -> list[_Route]:
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
@@ -223,12 +237,12 @@ def _clear_routes(ways: list[Any], lift_m: float, size: np.ndarray, keep_off: np
     above it; and the object is drawn straight out of the storage before the carry, or brought
     straight into it after, by each of `BEFORE_M`."""
     routes = []
-    open_ways = [entry for entry in ways if entry[0].name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
-    edge_ways = sorted((entry for entry in ways if entry[0].name == "fingertips-on-near-edge"),
-                       key=lambda entry: -float(entry[0].rotation[2, 2]))  # the steepest lean first
-    for way, grasp, release, _ in [*edge_ways, *open_ways]:
-        here = _confined(shifted(grasp, lift_m * UP), keep_off)
-        there = _confined(shifted(release, lift_m * UP), keep_off)
+    open_ways = [entry for entry in ways if entry.grasp_way.name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
+    edge_ways = sorted((entry for entry in ways if entry.grasp_way.name == "fingertips-on-near-edge"),
+                       key=lambda entry: -float(entry.grasp_way.rotation[2, 2]))  # the steepest lean first
+    for entry in [*edge_ways, *open_ways]:
+        way, grasp, release = entry.grasp_way, entry.grasp, entry.release
+        here, there = entry.confined_here, entry.confined_there
         if way.name == "fingertips-on-near-edge" and not (here or there):
             continue
         for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
@@ -254,7 +268,7 @@ def _detours(here: bool, there: bool) -> list[tuple[float, float]]:
     return [(out, inward) for out in outs for inward in ins]
 
 
-def _plain_routes(ways: list[Any], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
+def _plain_routes(ways: list[_Way], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
     """The routes as they were before clear chains were sought: every grasp, lifted `lift_m`, from
     high above where that is open, else directly; none where a board stands close over the grasp or
     the release (`_confined`). There an unchecked route wrecks the storage: a box lifted unchecked
@@ -262,12 +276,12 @@ def _plain_routes(ways: list[Any], lift_m: float, keep_off: np.ndarray | None) -
     (recursive 1018 of tuning-wide); a pick that fails there leaves the storage as it was."""
     none = np.zeros(3)
     routes = []
-    for way, grasp, release, _ in ways:
-        above = shifted(grasp, lift_m * UP)
-        if _confined(above, keep_off) or _confined(shifted(release, lift_m * UP), keep_off):
+    for entry in ways:
+        if entry.confined_here or entry.confined_there:
             continue
+        above = shifted(entry.grasp, lift_m * UP)
         for approach in _approaches(above, keep_off, none, before=False):
-            routes.append(_Route(way, grasp, release, lift_m, tuple(approach), none, none))
+            routes.append(_Route(entry.grasp_way, entry.grasp, entry.release, lift_m, tuple(approach), none, none))
     return routes
 
 
