@@ -19,6 +19,7 @@ from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF
                                hand_bottom, hand_touches)
 from skills.arm.part_plans import PUSH_PAST
 from skills.arm.pick_plans import HIGH_ABOVE_M
+from skills.arm.plan_builder import PlanBuilder
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -471,3 +472,23 @@ def test_of_several_places_a_pick_takes_the_first_a_clear_way_reaches(planner: A
     one = planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), blocked, surface_z=SURFACE,
                             keep_off=wall)
     assert not one.info["clear"] and one.info["place_point"] == pytest.approx(blocked)  # as before: it reaches
+
+
+def test_a_free_move_out_of_the_stowed_pose_is_checked_from_the_ready_pose_on(
+        planner: ArmPlanner, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Unfolding from the stowed pose, every skill's first leg, the arm passes within the margin kept
+    # over the surface at the body's edge: checked with it, no free move out of the stowed pose was
+    # ever clear, and each went unchecked. A box far aside is kept off; the way there is clear.
+    far = box_points(np.array([1.2, -0.3, SURFACE + 0.05]), np.array([0.1, 0.1, 0.1]))
+    builder = PlanBuilder(planner, np.array(STOWED), BASE, SURFACE, Clearance(planner, base_transform(BASE), SURFACE, far))
+
+    def no_way_round(*args: object) -> None:
+        raise AssertionError("the straight way out of the stowed pose was judged not clear")
+
+    monkeypatch.setattr(builder, "_way_round", no_way_round)
+    goal = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.9), 0.2, surface_z=SURFACE).steps[0].waypoints[-1]
+    builder.free_move("to the drawer handle", goal)
+    assert builder.q == pytest.approx(goal)
+    stowing = PlanBuilder(planner, goal, BASE, SURFACE, Clearance(planner, base_transform(BASE), SURFACE, far))
+    monkeypatch.setattr(stowing, "_way_round", no_way_round)
+    stowing.free_move("stow", np.array(STOWED))

@@ -138,7 +138,8 @@ class PlanBuilder:
         if via_ready and stowed:
             start.append(arm.ready)
         end = [goal]
-        if via_ready and arm.stowed is not None and np.abs(goal - arm.stowed).max() < FOLDED_RAD and not stowed:
+        into_stow = via_ready and arm.stowed is not None and np.abs(goal - arm.stowed).max() < FOLDED_RAD and not stowed
+        if into_stow:
             end.insert(0, arm.ready)
         routes = [*self._over_the_surface(start, end)]
         if self.clearance is not None and not any(np.abs(q - arm.ready).max() < FOLDED_RAD for q in (*start, *end)):
@@ -153,7 +154,8 @@ class PlanBuilder:
             if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
                 continue
             above = above or step
-            if self.clearance is None or self.clearance.path_problem(step.samples, every=3, hand=True) is None:
+            if self.clearance is None or self.clearance.path_problem(
+                    self._beyond_ready(step, via_ready and stowed, into_stow), every=3, hand=True) is None:
                 above, clear = step, True
                 break
         if not clear and self.clearance is not None:
@@ -165,6 +167,18 @@ class PlanBuilder:
                                  f"at {self.surface_z:.3f} m, even with the lift up")
         self.steps.append(above)
         self.q = goal.copy()
+
+    def _beyond_ready(self, step: Step, out_of_stow: bool, into_stow: bool) -> np.ndarray:
+        """The samples of a free move that are checked clear: those between the ready pose and the
+        goal. The legs between the stowed and the ready pose are every skill's way out of the base
+        and back into it, and there the folded arm grazes the margin kept over the surface at the
+        body's edge by a few millimetres: checked, every free move out of the stowed pose would be
+        judged not clear, and go unchecked."""
+        samples = step.samples
+        if not (out_of_stow or into_stow):
+            return samples
+        at_ready = int(np.argmin(np.abs(samples - self.arm.ready).max(axis=1)))  # passed once: not both
+        return samples[at_ready:] if out_of_stow else samples[:at_ready + 1]
 
     def _way_round(self, name: str, start: list[np.ndarray], end: list[np.ndarray], target: np.ndarray
                    ) -> Step | None:
