@@ -15,6 +15,7 @@ import numpy as np
 from agent.pose import Pose2D
 from skills.arm.frames import base_transform
 from skills.arm.kinematics import ArmKinematics
+from skills.arm.link_shells import link_bulges
 from skills.arm.skill_plan import CAREFUL_SPEED, FREE_SPEED, SkillPlanError, Step
 from skills.arm.trajectory import JointLimits, plan_trajectory
 
@@ -75,6 +76,10 @@ class ArmModel:
         lifts = [k for k, name in enumerate(names) if "lift" in name]
         #: The lift's index in ``q`` (a prismatic joint raising the whole arm), if the robot has one.
         self.lift_index: int | None = lifts[0] if lifts else None
+        #: The first joint of the skeleton kept clear of things: the lift's origin sits in the base.
+        self.skeleton_first = 0 if self.lift_index is None else self.lift_index + 1
+        #: Where each of the skeleton's links bulges out of the tube round it (`skills.arm.link_shells`).
+        self.link_bulges = link_bulges(urdf_xml, self.kin, self.skeleton_first)
 
     @classmethod
     def from_description(cls, description: Mapping[str, Any], **options: Any) -> Self:

@@ -8,8 +8,8 @@ through the door standing open beside it and pushed it shut. `Clearance` says, f
 what the links would touch: the links are spheres strung along the arm's skeleton, the origins
 of successive revolute joints and the corners where a link turns between two of them
 (`skills.arm.kinematics.ArmKinematics.skeleton`; `LINK_RADIUS_M` round: the Panda's links are
-~12 cm thick), the
-table is the surface the plan works over, what stands near is the memory's points, and what the
+~12 cm thick), and where a link's mesh bulges out of that tube, spheres fixed to the link
+(`skills.arm.link_shells`: the wrist's housing); the table is the surface the plan works over, what stands near is the memory's points, and what the
 hand carries is a box fixed to the TCP. The segment from the last joint to the TCP is the hand's,
 left to its boxes.
 
@@ -26,9 +26,8 @@ from scipy.spatial import cKDTree
 
 from skills.arm.arm_model import ArmModel
 from skills.arm.grasps import hand_touches
+from skills.arm.link_shells import LINK_RADIUS_M
 
-#: The links' radius around their skeleton (m).
-LINK_RADIUS_M = 0.065
 #: The spacing of the spheres along each segment (m).
 SPHERE_STEP_M = 0.04
 #: How far (m) the links keep above a surface, from other points and from what the hand carries.
@@ -159,10 +158,25 @@ class Clearance:
         self.tree = cKDTree(points) if points is not None and len(points) else None
         self.radius = radius_m
         self.clearance = clearance_m
-        self._first = 0 if arm.lift_index is None else arm.lift_index + 1  # the lift's origin sits in the base
+
+    def sphere_sets(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The links' sphere centres (world) for joint positions ``q``: along the skeleton, and where
+        the links bulge out of the tube round it.
+
+        Args:
+            q: (dof,) joint positions.
+
+        Returns:
+            (M, 3) and (B, 3) centres.
+        """
+        arm, base = self.arm, self.base
+        skeleton = link_spheres(arm.kin.skeleton(q, arm.skeleton_first))
+        frames = base @ arm.kin.link_frames(q, arm.skeleton_first)
+        bulges = [centres @ frame[:3, :3].T + frame[:3, 3] for frame, centres in zip(frames, arm.link_bulges)]
+        return skeleton @ base[:3, :3].T + base[:3, 3], np.vstack([np.zeros((0, 3)), *bulges])
 
     def spheres(self, q: np.ndarray) -> np.ndarray:
-        """The links' sphere centres (world) for joint positions ``q``.
+        """All the links' sphere centres (world) for joint positions ``q`` (`sphere_sets`).
 
         Args:
             q: (dof,) joint positions.
@@ -170,8 +184,7 @@ class Clearance:
         Returns:
             (M, 3) centres.
         """
-        skeleton = self.arm.kin.skeleton(q, self._first)
-        return link_spheres(skeleton @ self.base[:3, :3].T + self.base[:3, 3])
+        return np.vstack(self.sphere_sets(q))
 
     def problem(self, q: np.ndarray, carried: Carried | None = None, hand: bool = False) -> str | None:
         """What the links would touch with the arm at ``q``, in words; None when nothing.
@@ -185,11 +198,12 @@ class Clearance:
         Returns:
             The reason, or None.
         """
-        centres = self.spheres(q)
+        skeleton, bulges = self.sphere_sets(q)
+        centres = np.vstack([skeleton, bulges])
         reach = self.radius + self.clearance
-        if self.surface_z is not None:
-            off_body = np.hypot(*(centres[:, :2] - self.base[:2, 3]).T) > self.arm.body_radius
-            low = float(centres[off_body, 2].min(initial=math.inf)) - self.radius
+        if self.surface_z is not None:  # the skeleton's: the housings' undersides fold in low by the body
+            off_body = np.hypot(*(skeleton[:, :2] - self.base[:2, 3]).T) > self.arm.body_radius
+            low = float(skeleton[off_body, 2].min(initial=math.inf)) - self.radius
             if low < self.surface_z + self.clearance:
                 return f"the arm's links would come down to {low:.3f} m, onto the surface at {self.surface_z:.3f} m"
         if self.tree is not None:

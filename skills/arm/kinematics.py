@@ -184,29 +184,58 @@ class ArmKinematics:
         pin.framesForwardKinematics(self.model, self.data, self._model_q(q))
         return self.data.oMf[self._frame].homogeneous.copy()
 
+    def link_lines(self, first: int = 0) -> list[tuple[str, np.ndarray]]:
+        """The arm's skeleton link by link, each in its own frame: for each controlled joint from the
+        ``first`` on but the last, the joint's name and the polyline its link runs along, from the
+        joint's origin to the next joint's, by way of the corner where the link turns when the next
+        joint sits both aside of this one's axis and along it (its placement's x, then the rest, as
+        the URDF's modified Denavit–Hartenberg offsets run). The Panda's forearm runs 8 cm aside of
+        the elbow, then 38 cm along to the wrist: a straight line between the two origins passes up
+        to 8 cm inside the link's shell, where the elbow's side of the forearm is.
+
+        Args:
+            first: the first joint (in the order of ``joints``) the skeleton starts at.
+
+        Returns:
+            (joint name, (k, 3) points in that joint's frame), in order along the chain.
+        """
+        lines = []
+        for name, child in zip(self.joint_names[first:-1], self._joint_ids[first + 1:], strict=True):
+            offset = self.model.jointPlacements[child].translation.copy()
+            turns = abs(offset[0]) > 1e-6 and np.linalg.norm(offset[1:]) > 1e-6
+            corner = [np.array([offset[0], 0.0, 0.0])] if turns else []
+            lines.append((name, np.array([np.zeros(3), *corner, offset])))
+        return lines
+
+    def link_frames(self, q: np.ndarray, first: int = 0) -> np.ndarray:
+        """Where the controlled joints' frames are, from the ``first`` on.
+
+        Args:
+            q: (dof,) joint positions.
+            first: the first joint (in the order of ``joints``).
+
+        Returns:
+            (k, 4, 4) poses in the root frame, in order along the chain.
+        """
+        pin.forwardKinematics(self.model, self.data, self._model_q(q))
+        return np.array([self.data.oMi[joint].homogeneous for joint in self._joint_ids[first:]])
+
     def skeleton(self, q: np.ndarray, first: int = 0) -> np.ndarray:
-        """The arm's skeleton, for clearance checks: the origins of the controlled joints' frames from
-        the ``first`` on, and between two of them the corner where the link turns, where a joint
-        sits both aside of its parent's axis and along it (its placement's x, then the rest, as the
-        URDF's modified Denavit–Hartenberg offsets run). The Panda's forearm runs 8 cm aside of the
-        elbow, then 38 cm along to the wrist: a straight line between the two origins passes up to
-        8 cm inside the link's shell, where the elbow's side of the forearm is.
+        """The arm's skeleton, for clearance checks: `link_lines` where the joints are.
 
         Args:
             q: (dof,) joint positions.
             first: the first joint (in the order of ``joints``) the skeleton starts at.
 
         Returns:
-            (k, 3) points in the root frame, in order along the chain.
+            (k, 3) points in the root frame, in order along the chain: the joints' origins and the
+            corners between them.
         """
-        pin.forwardKinematics(self.model, self.data, self._model_q(q))
-        points = []
-        for k, joint in enumerate(self._joint_ids[first:]):
-            offset = self.model.jointPlacements[joint].translation
-            if k and abs(offset[0]) > 1e-6 and np.linalg.norm(offset[1:]) > 1e-6:
-                points.append(self.data.oMi[self.model.parents[joint]].act(np.array([offset[0], 0.0, 0.0])))
-            points.append(self.data.oMi[joint].translation.copy())
-        return np.array(points)
+        frames = self.link_frames(q, first)
+        points = [frames[0][:3, 3][None, :]]
+        for frame, (_, line) in zip(frames, self.link_lines(first)):
+            points.append(line[1:] @ frame[:3, :3].T + frame[:3, 3])
+        return np.vstack(points)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """How the TCP moves with the joints.
