@@ -26,6 +26,8 @@ _GEOMETRY = input_port("geometry", PartGeometry, "the door or drawer as perceive
                        "slide), unless geometry_is_open")
 _PART_KEEP_OFF = input_port("keep_off", np.ndarray, "points (N, 3) of what stands near, neither the part nor the "
                            "piece it belongs to, which the arm is to keep off", default=None)
+_PART_POINTS = input_port("part_points", np.ndarray, "points (N, 3) of the part and of its piece's handles where "
+                          "they stand now, which the free move to the handle keeps off", default=None)
 
 
 def _check_kind(geometry: PartGeometry, label: str, kind: str, skill: str) -> None:
@@ -45,6 +47,7 @@ class _OpenPart(ArmSkill):
         input_port("amount", float, "how far to open it (m or rad; default: the kind's usual opening)", default=None),
         input_port("hold", bool, "end with the hand still on the handle, the part held open", default=False),
         _PART_KEEP_OFF,
+        _PART_POINTS,
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
@@ -52,7 +55,8 @@ class _OpenPart(ArmSkill):
         _check_kind(inputs["geometry"], inputs["label"], self.kind, self.skill_name)
         amount = DEFAULT_AMOUNT[self.kind] if inputs["amount"] is None else inputs["amount"]
         return planner.plan_open(q, base_pose, inputs["geometry"], amount, surface_z=inputs["surface_z"],
-                                 skill=self.skill_name, hold=inputs["hold"], keep_off=inputs["keep_off"])
+                                 skill=self.skill_name, hold=inputs["hold"], keep_off=inputs["keep_off"],
+                                 part_points=inputs["part_points"])
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; opened {_amount_text(self.kind, result.achieved)}"
@@ -61,7 +65,7 @@ class _OpenPart(ArmSkill):
 class _ClosePart(ArmSkill):
     """With ``held`` the hand already holds the handle (an open bound with ``hold``): it pushes the
     part shut from there instead of grasping it first, along the only path the handle allows
-    (``keep_off`` has nothing to choose there)."""
+    (``keep_off`` and ``part_points`` have nothing to choose there)."""
 
     kind = ""
     ports = ArmSkill.ports + (
@@ -71,6 +75,7 @@ class _ClosePart(ArmSkill):
                    default=False),
         input_port("held", bool, "the hand already holds the handle (an open bound with hold)", default=False),
         _PART_KEEP_OFF,
+        _PART_POINTS,
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
@@ -84,7 +89,8 @@ class _ClosePart(ArmSkill):
                                            skill=self.skill_name)
         return planner.plan_close(q, base_pose, geometry, inputs["amount"],
                                   geometry_is_open=inputs["geometry_is_open"], surface_z=inputs["surface_z"],
-                                  skill=self.skill_name, keep_off=inputs["keep_off"])
+                                  skill=self.skill_name, keep_off=inputs["keep_off"],
+                                  part_points=inputs["part_points"])
 
     def summary(self, result: SkillResult) -> str:
         return f"{super().summary(result)}; left open {_amount_text(self.kind, result.achieved)}"

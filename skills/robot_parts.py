@@ -243,7 +243,7 @@ class DoorsAndDrawers:
                         hold: bool) -> ArmResult:
         return self.body.run(f"open_{geometry.kind}", geometry=geometry, amount=amount,
                              surface_z=self.body.surface_z(geometry.handle_point), label=f"{part.label} {part.id}",
-                             hold=hold, keep_off=self.near(part))
+                             hold=hold, keep_off=self.near(part), part_points=self.own_points(part))
 
     def near(self, part: Instance) -> np.ndarray:
         """The points of what stands near a door or drawer, for the arm to keep off while it opens or
@@ -259,6 +259,32 @@ class DoorsAndDrawers:
         Returns:
             (N, 3) world points.
         """
+        piece, family = self._family(part)
+        boxes = [box for box in (piece.bounds, part.bounds) if np.all(np.isfinite(box[0]))]
+        if len(boxes) == 2:
+            lo, hi = boxes[1]
+            boxes[1] = (lo, np.r_[hi[:2], max(hi[2], boxes[0][1][2])])
+        return self.body.points_near(family, boxes, PIECE_MARGIN_M)
+
+    def own_points(self, part: Instance) -> np.ndarray:
+        """The points of a door or drawer and of every handle of the piece it belongs to, where the
+        memory holds them now (an open part's carried along by the skill that opened it), for the
+        free move to its handle to keep off: `near` leaves them all out, and on its way to a door's
+        handle a finger caught the handle of the drawer beside it (drawer-door 1007 of tuning-wide).
+
+        Args:
+            part: the door or drawer.
+
+        Returns:
+            (N, 3) world points.
+        """
+        memory = self.body.memory
+        handles = [memory.get(i).points() for i in self._family(part)[1] if memory.get(i).label == "handle"]
+        return np.vstack([part.points(), *handles])
+
+    def _family(self, part: Instance) -> tuple[Instance, set[int]]:
+        """The piece a door or drawer belongs to (the part itself where it is seen on its own), and
+        the memory ids of the piece, the part and all that hangs under them."""
         memory = self.body.memory
         parent = memory.instances.get(part.parent) if part.parent is not None else None
         piece = parent if parent is not None and not parent.gone else part
@@ -268,11 +294,7 @@ class DoorsAndDrawers:
             if inst.id not in family:
                 family.add(inst.id)
                 todo.extend(inst.children)
-        boxes = [box for box in (piece.bounds, part.bounds) if np.all(np.isfinite(box[0]))]
-        if len(boxes) == 2:
-            lo, hi = boxes[1]
-            boxes[1] = (lo, np.r_[hi[:2], max(hi[2], boxes[0][1][2])])
-        return self.body.points_near(family, boxes, PIECE_MARGIN_M)
+        return piece, family
 
     def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
                       moved: float = 0.0) -> float:
@@ -338,7 +360,7 @@ class DoorsAndDrawers:
             self.drive(opened.stand)
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
-                          held=opened.held, keep_off=self.near(part))
+                          held=opened.held, keep_off=self.near(part), part_points=self.own_points(part))
         # A drawer is pushed on past where it was seen shut until it meets its end stop, and the hand
         # may go on a little further than the part; the memory holds a shut part where it was seen shut.
         left = opened.amount if result.achieved is None else max(result.achieved, 0.0)

@@ -37,9 +37,9 @@ def test_a_drawer_keeps_the_arm_off_its_neighbours_but_not_off_its_own_chest_and
     _remember(robot, "table", (0.0, 0.3, 0.745), (1.2, 0.8, 0.02))
     chest = _remember(robot, "drawer_chest", (0.0, 0.4, 0.9), (0.4, 0.3, 0.3))
     drawer = _remember(robot, "drawer", (0.0, 0.1, 0.82), (0.36, 0.3, 0.1), chest)  # pulled 0.15 m out
-    _remember(robot, "handle", (0.0, -0.06, 0.82), (0.1, 0.02, 0.02), drawer)
+    handle = _remember(robot, "handle", (0.0, -0.06, 0.82), (0.1, 0.02, 0.02), drawer)
     other = _remember(robot, "drawer", (0.0, 0.25, 0.95), (0.36, 0.02, 0.1), chest)
-    _remember(robot, "handle", (0.0, 0.23, 0.95), (0.1, 0.02, 0.02), other)
+    other_handle = _remember(robot, "handle", (0.0, 0.23, 0.95), (0.1, 0.02, 0.02), other)
     mug = _remember(robot, "mug", (0.05, 0.05, 0.87), (0.08, 0.08, 0.1))  # in the open drawer, over its front
     box = _remember(robot, "box", (0.35, -0.2, 0.8), (0.12, 0.12, 0.1))  # standing before the chest, aside
     near = robot.parts.near(drawer)
@@ -48,3 +48,7 @@ def test_a_drawer_keeps_the_arm_off_its_neighbours_but_not_off_its_own_chest_and
     # the drawer above: its chest left out too, but what stands in the open drawer below, outside
     # the chest and not in this drawer, is in the way
     assert len(robot.parts.near(other)) == len(box.points()) + len(mug.points())
+    # the drawer itself and every handle of its chest, where they stand now, for the free move to
+    # the handle; not the chest's body, nor the drawer above, nor what stands about
+    own = robot.parts.own_points(drawer)
+    assert len(own) == len(drawer.points()) + len(handle.points()) + len(other_handle.points())

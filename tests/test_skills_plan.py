@@ -10,16 +10,17 @@ import pytest
 
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry, hinge_axis
-from agent.perception.part_motion import moved_geometry
+from agent.perception.part_motion import moved_geometry, part_motion
 from skills.arm.arm_model import READY
-from skills.arm.clearance import Clearance, box_points
+from skills.arm.clearance import CLEARANCE_M, Clearance, box_points
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
 from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
                                hand_bottom, hand_touches)
+from skills.arm.link_shells import LINK_RADIUS_M
 from skills.arm.part_plans import PUSH_PAST
 from skills.arm.pick_plans import HIGH_ABOVE_M
-from skills.arm.plan_builder import PlanBuilder
+from skills.arm.plan_builder import ESCAPE_RAD, PlanBuilder
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.arm.stand import stand_pose
@@ -492,3 +493,49 @@ def test_a_free_move_out_of_the_stowed_pose_is_checked_from_the_ready_pose_on(
     stowing = PlanBuilder(planner, goal, BASE, SURFACE, Clearance(planner, base_transform(BASE), SURFACE, far))
     monkeypatch.setattr(stowing, "_way_round", no_way_round)
     stowing.free_move("stow", np.array(STOWED))
+
+
+def test_the_way_to_an_open_door_s_handle_keeps_the_arm_off_the_door(planner: ArmPlanner) -> None:
+    # occlusion 1009 and recursive 1025 (tuning-wide): on its way to the handle of a door it had
+    # opened, the arm came down on the door (a finger on the handle, the wrist on the leaf); the
+    # door was pushed on open, and left so.
+    geometry, amount = _door(), 1.2
+    leaf = box_points(np.array([0.225, 0.075, 0.95]), np.array([0.45, 0.02, 0.5]), step_m=0.01)
+    bar = box_points(np.array([0.4, 0.04, 0.95]), np.array([0.02, 0.02, 0.12]), step_m=0.01)
+    swung = part_motion(geometry, amount)
+    door = np.vstack([leaf, bar]) @ swung[:3, :3].T + swung[:3, 3]
+    touching = Clearance(planner, base_transform(BASE), None, door)
+
+    def way_in(plan: SkillPlan) -> list[Step]:
+        return [step for step in plan.steps if step.name.startswith(("to the pre-grasp", "approach"))]
+
+    unchecked = planner.plan_close(np.array(STOWED), BASE, geometry, amount, surface_z=SURFACE)
+    assert any(touching.path_problem(step.samples) for step in way_in(unchecked))
+    plan = planner.plan_close(np.array(STOWED), BASE, geometry, amount, surface_z=SURFACE, part_points=door)
+    _check_runnable(plan, np.array(STOWED))
+    assert not any(touching.path_problem(step.samples) for step in way_in(plan))
+
+
+def test_a_free_move_to_a_posture_that_touches_is_checked_short_of_it(
+        planner: ArmPlanner, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The arm at an open door's handle may lie along the door's leaf (its chain is checked apart).
+    # A free move there was judged not clear as a whole, found no way round to a goal that touches,
+    # and ran unchecked; now all of it but the last ESCAPE_RAD is checked.
+    goal = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.9), 0.2, surface_z=SURFACE).steps[0].waypoints[-1]
+    skeleton = Clearance(planner, base_transform(BASE), SURFACE).sphere_sets(goal)[0]
+    below_elbow = skeleton[len(skeleton) // 2] - np.array([0.0, 0.0, LINK_RADIUS_M + CLEARANCE_M / 2])
+    points = below_elbow + np.random.default_rng(0).uniform(-0.004, 0.004, (6, 3))
+    clearance = Clearance(planner, base_transform(BASE), SURFACE, points)
+    assert clearance.problem(goal) is not None
+    builder = PlanBuilder(planner, np.array(STOWED), BASE, SURFACE, clearance)
+
+    def no_way_round(*args: object) -> None:
+        raise AssertionError("the way to the goal was judged not clear for the goal's own touch")
+
+    monkeypatch.setattr(builder, "_way_round", no_way_round)
+    builder.free_move("to the pre-grasp pose of the drawer handle", goal)
+    samples = builder.steps[-1].samples
+    beyond_ready = samples[int(np.argmin(np.abs(samples - planner.ready).max(axis=1))):]
+    away = beyond_ready[np.abs(beyond_ready - goal).max(axis=1) >= ESCAPE_RAD]
+    assert len(away) and clearance.path_problem(away) is None
+

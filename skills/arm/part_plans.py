@@ -12,10 +12,10 @@ Grasp variants (the hand turned half a turn about its axis, tilted about the bar
 `skills.arm.grasps.level_grasps`) and the grasp's IK postures (structured seeds, then a few random
 restarts) are tried in turn until one chain is reachable throughout; with ``keep_off`` (what stands
 near: `skills.arm.clearance.Clearance`), first until one along which the whole arm and the hand
-keep clear of it, and the free move to the staging pose takes a route that does. With ``surface_z`` (a table's
-top) variants whose hand would come down onto it are refused (`skills.arm.grasps.HAND_BOXES`): a
-bar less than ~9 cm above the table cannot be grasped by a Panda hand 21 cm tall across its
-fingers. A drawer's bar is then grasped from above, the fingers closed and their tips brought down
+keep clear of it, and the free move to the staging pose takes a route that does; with
+``part_points`` that free move keeps off the part itself too. With ``surface_z`` (a table's top)
+variants whose hand would come down onto it are refused (`skills.arm.grasps.HAND_BOXES`): a bar
+less than ~9 cm above the table cannot be grasped by a Panda hand 21 cm tall across its fingers. A drawer's bar is then grasped from above, the fingers closed and their tips brought down
 onto it until they touch (`skills.arm.grasps.handle_top_grasps`). An opening may end holding the
 handle (``hold``); `plan_close_held` then pushes the part shut from that grasp.
 """
@@ -64,7 +64,7 @@ _Chain = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def plan_open(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
               surface_z: float | None = None, skill: str | None = None, hold: bool = False,
-              keep_off: np.ndarray | None = None) -> SkillPlan:
+              keep_off: np.ndarray | None = None, part_points: np.ndarray | None = None) -> SkillPlan:
     """Open a door or drawer (see the module doc).
 
     Args:
@@ -78,6 +78,11 @@ def plan_open(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeo
         hold: end holding the handle, the part pulled open (no letting go, no backing off): it
             cannot swing on or be knocked while the robot looks, and `plan_close_held` shuts it
             again without a second grasp.
+        keep_off: (N, 3) points of what stands near, neither the part nor its piece: the chain and
+            its free move keep clear of them where a grasp posture lets them.
+        part_points: (N, 3) points of the part and of its piece's handles where they stand now: the
+            free move to the handle keeps off them (a door standing open lies across the way to its
+            handle, a drawer's handle beside a door's), and the links keep off the part on the way in.
 
     Returns:
         The plan; ``info`` has the grasp and release poses and the grasp variant taken.
@@ -87,12 +92,13 @@ def plan_open(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeo
     """
     _check_amount(geometry, amount)
     return _plan_part(arm, q, base_pose, geometry, 0.0, float(amount), skill or f"open_{geometry.kind}", surface_z,
-                      hold, keep_off)
+                      hold, keep_off, part_points)
 
 
 def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
                geometry_is_open: bool = False, surface_z: float | None = None,
-               skill: str | None = None, keep_off: np.ndarray | None = None) -> SkillPlan:
+               skill: str | None = None, keep_off: np.ndarray | None = None,
+               part_points: np.ndarray | None = None) -> SkillPlan:
     """Close a door or drawer that stands open, taking the posture its opening took.
 
     Args:
@@ -105,6 +111,7 @@ def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
         surface_z: as for `plan_open`.
         skill: the plan's name (default ``close_<kind>``).
         keep_off: as for `plan_open`.
+        part_points: as for `plan_open`.
 
     Returns:
         The plan.
@@ -116,7 +123,7 @@ def plan_close(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     if geometry_is_open:
         geometry = moved_geometry(geometry, -float(amount))
     return _plan_part(arm, q, base_pose, geometry, float(amount), 0.0, skill or f"close_{geometry.kind}", surface_z,
-                      keep_off=keep_off)
+                      keep_off=keep_off, part_points=part_points)
 
 
 def plan_close_held(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, amount: float, *,
@@ -181,7 +188,7 @@ def _retraced(ik: IKSearch, poses: list[np.ndarray], what: str, error: SkillPlan
 
 def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGeometry, start: float, end: float,
                skill: str, surface_z: float | None, hold: bool = False,
-               keep_off: np.ndarray | None = None) -> SkillPlan:
+               keep_off: np.ndarray | None = None, part_points: np.ndarray | None = None) -> SkillPlan:
     """Grasp the handle of ``geometry`` (as seen closed) opened by ``start``, move it to ``end``,
     and (unless ``hold``) let go and back off.
 
@@ -194,10 +201,14 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     the straight lines off either end of it) and the pieces are put in the order the arm runs
     them; so closing a part takes the posture its opening took, which is known to reach along the
     whole path. With ``keep_off``, the first chain of any grasp variant along which the arm and
-    hand keep clear of it is taken (`_part_chains`, `_chain_problem`), and the free move to it
-    keeps clear too; where none does, the plan is the one made without it: the first chain that
-    reaches, its free move unchecked. What stands near is known only by the points seen of it,
-    and a posture that touches a voxel of it is still better than no plan.
+    hand keep clear of it, and the links of ``part_points`` on the way in, is taken
+    (`_part_chains`, `_chain_problem`), and the free move to it keeps clear of both; where none
+    does, the plan is the one made without them: the first chain that reaches, its free move kept
+    off only ``part_points``. What stands near is known only by the
+    points seen of it, and a posture that touches a voxel of it is still better than no plan. The
+    part itself is kept off by the free move alone: the approach, the grasp and the part's path
+    are on it (occlusion 1009 of tuning-wide: on its way to an open door's handle, a finger
+    came down on it, and the door was left open).
     """
     what = f"{geometry.kind} handle"
     opening = end > start
@@ -212,9 +223,12 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     shut = 1 if past else 0  # the index of the pose with the part as seen shut
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
-    near = None if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
-    clearance = Clearance(arm, base_transform(base_pose), surface_z, near) if near is not None and len(near) else None
-    builder = PlanBuilder(arm, here, base_pose, surface_z)  # its free move checked only for a chain checked clear
+    base = base_transform(base_pose)
+    near, own = (np.zeros((0, 3)) if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+                 for points in (keep_off, part_points))
+    clearance = Clearance(arm, base, surface_z, near) if len(near) else None
+    itself = Clearance(arm, base, surface_z, own) if len(own) else None
+    builder = PlanBuilder(arm, here, base_pose, surface_z, itself)
     failures: dict[str, list[str]] = {}
     # the chain taken without the check: the first that reaches, of the first variant that has one
     fallback: tuple[HandleGrasp, list[np.ndarray], _Chain] | None = None
@@ -226,14 +240,14 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
             tried.append(refusal)
             continue
         for chain in _part_chains(ik, poses, what, opening, way.touch, tried):
-            if clearance is None:
+            if clearance is None and itself is None:
                 fallback = fallback or (way, poses, chain)
                 break
-            if _chain_problem(clearance, chain) is None:
-                builder.clearance = clearance
+            if _chain_problem(clearance, itself, chain) is None:
+                builder.clearance = Clearance(arm, base, surface_z, np.vstack([near, own]))
                 return _build(builder, ik, geometry, way, poses, chain, (start, end), shut, skill, hold, clear=True)
             fallback = fallback or (way, poses, chain)
-        if clearance is None and fallback is not None:
+        if clearance is None and itself is None and fallback is not None:
             break
     if fallback is not None:
         return _build(builder, ik, geometry, *fallback, (start, end), shut, skill, hold, clear=False)
@@ -265,9 +279,15 @@ def _build(builder: PlanBuilder, ik: IKSearch, geometry: PartGeometry, way: Hand
     return builder.finish(skill, info, ik)
 
 
-def _chain_problem(clearance: Clearance, chain: _Chain) -> str | None:
-    """What the arm or the hand would touch along a part's chain (every other waypoint); None for nothing."""
-    return next(filter(None, (clearance.path_problem(waypoints, every=2, hand=True) for waypoints in chain)), None)
+def _chain_problem(near: Clearance | None, itself: Clearance | None, chain: _Chain) -> str | None:
+    """What the arm or the hand would touch of what stands near along a part's chain, or what the
+    links would touch of the part itself on the way in to its handle (every other waypoint); None
+    for nothing. The part is where it stands before the chain: once it moves, its points are not."""
+    swept, approach, retreat = chain
+    checks = [] if near is None else [lambda w=w: near.path_problem(w, every=2, hand=True) for w in chain]
+    if itself is not None:
+        checks.append(lambda: itself.path_problem(approach, every=2))
+    return next(filter(None, (check() for check in checks)), None)
 
 
 def _part_chains(ik: IKSearch, poses: list[np.ndarray], what: str, opening: bool, touch: bool,

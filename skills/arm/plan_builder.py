@@ -148,6 +148,8 @@ class PlanBuilder:
         low = math.inf
         above: Step | None = None  # the first route that keeps the hand above the surface
         clear = False
+        # a goal posture that itself touches (the arm at an open door's handle lies along its leaf)
+        arrival = end[0] if self.clearance is not None and self.clearance.problem(end[0], hand=True) else None
         for waypoints in routes:
             step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
             low = self.lowest(step)
@@ -155,11 +157,11 @@ class PlanBuilder:
                 continue
             above = above or step
             if self.clearance is None or self.clearance.path_problem(
-                    self._beyond_ready(step, via_ready and stowed, into_stow), every=3, hand=True) is None:
+                    self._checked(step, via_ready and stowed, into_stow, arrival), every=3, hand=True) is None:
                 above, clear = step, True
                 break
         if not clear and self.clearance is not None:
-            above = self._way_round(name, start, end, target) or above
+            above = self._way_round(name, start, end, target, arrival is not None) or above
         if above is None:
             assert self.surface_z is not None
             raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
@@ -168,25 +170,29 @@ class PlanBuilder:
         self.steps.append(above)
         self.q = goal.copy()
 
-    def _beyond_ready(self, step: Step, out_of_stow: bool, into_stow: bool) -> np.ndarray:
+    def _checked(self, step: Step, out_of_stow: bool, into_stow: bool, arrival: np.ndarray | None) -> np.ndarray:
         """The samples of a free move that are checked clear: those between the ready pose and the
-        goal. The legs between the stowed and the ready pose are every skill's way out of the base
-        and back into it, and there the folded arm grazes the margin kept over the surface at the
-        body's edge by a few millimetres: checked, every free move out of the stowed pose would be
-        judged not clear, and go unchecked."""
+        goal, and with an ``arrival`` that touches something itself, not those within `ESCAPE_RAD`
+        of it (the chain it leads to is checked on its own). The legs between the stowed and the
+        ready pose are every skill's way out of the base and back into it, and there the folded arm
+        grazes the margin kept over the surface at the body's edge by a few millimetres: checked,
+        every free move out of the stowed pose would be judged not clear, and go unchecked."""
         samples = step.samples
-        if not (out_of_stow or into_stow):
-            return samples
-        at_ready = int(np.argmin(np.abs(samples - self.arm.ready).max(axis=1)))  # passed once: not both
-        return samples[at_ready:] if out_of_stow else samples[:at_ready + 1]
+        if out_of_stow or into_stow:
+            at_ready = int(np.argmin(np.abs(samples - self.arm.ready).max(axis=1)))  # passed once: not both
+            samples = samples[at_ready:] if out_of_stow else samples[:at_ready + 1]
+        if arrival is not None:
+            samples = samples[np.abs(samples - arrival).max(axis=1) >= ESCAPE_RAD]
+        return samples
 
-    def _way_round(self, name: str, start: list[np.ndarray], end: list[np.ndarray], target: np.ndarray
-                   ) -> Step | None:
+    def _way_round(self, name: str, start: list[np.ndarray], end: list[np.ndarray], target: np.ndarray,
+                   arriving_touched: bool = False) -> Step | None:
         """A free move round what stands near (`skills.arm.free_path`), for when no straight route is
         clear: the whole arm clear of it, the hand above the surface. Where the arm starts touching
         something (the door it let go of), the first `ESCAPE_RAD` of the way out are not held
-        against it. None when no way is found, or the trajectory through the way's waypoints
-        strays into something."""
+        against it; with ``arriving_touched`` (the way's end touches something), nor the last
+        `ESCAPE_RAD` of the way in. None when no way is found, or the trajectory through the way's
+        waypoints strays into something."""
         clearance = self.clearance
         assert clearance is not None
         origin = start[-1]
@@ -197,6 +203,8 @@ class PlanBuilder:
             if self.surface_z is not None and hand_bottom(self.base @ self.arm.kin.forward(q), self.base,
                                                           self.arm.body_radius) < self.surface_z + SURFACE_CLEARANCE_M:
                 return False
+            if arriving_touched and float(np.abs(q - end[0]).max()) < ESCAPE_RAD:
+                return True
             return clearance.problem(q, hand=True) is None
 
         rng = np.random.default_rng(self.arm.seed)
