@@ -171,9 +171,12 @@ class LookAt(ArmSkill):
         input_port("look_point", np.ndarray, "the point to look at (x, y, z)"),
         input_port("standoff_m", float, "the camera's distance from it (default: the planner's)", default=None),
         input_port("pitch_deg", float, "the camera's pitch below level (default: the planner's)", default=None),
+        input_port("keep_off", np.ndarray, "points (N, 3) of what stands near, which the arm is to keep off",
+                   default=None),
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_look(q, base_pose, inputs["look_point"], standoff_m=inputs["standoff_m"],
-                                 pitch_deg=inputs["pitch_deg"], surface_z=inputs["surface_z"], skill=self.skill_name)
+                                 pitch_deg=inputs["pitch_deg"], surface_z=inputs["surface_z"], skill=self.skill_name,
+                                 keep_off=inputs["keep_off"])

@@ -422,10 +422,11 @@ class DoorsAndDrawers:
         return closed_centre - (depth / 2) * geometry.normal
 
     def _look_into(self, point: np.ndarray) -> None:
-        """The wrist camera at ``point``, its frame into the memory, the arm folded away again. A
-        view that cannot be reached is skipped: the head camera saw what it could."""
+        """The wrist camera at ``point``, its frame into the memory, the arm folded away again, keeping
+        off all that is remembered (the part just opened among it). A view that cannot be reached
+        is skipped: the head camera saw what it could."""
         surface_z = self.body.surface_z(point)
-        looked = self.body.run(LOOK, look_point=point, surface_z=surface_z)
+        looked = self.body.run(LOOK, look_point=point, surface_z=surface_z, keep_off=self.body.points_near(()))
         if looked.ok:
             self.views.append(self.body.look("wrist"))
         self.body.run(STOW, surface_z=surface_z)

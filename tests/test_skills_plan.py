@@ -539,3 +539,19 @@ def test_a_free_move_to_a_posture_that_touches_is_checked_short_of_it(
     away = beyond_ready[np.abs(beyond_ready - goal).max(axis=1) >= ESCAPE_RAD]
     assert len(away) and clearance.path_problem(away) is None
 
+
+def test_a_look_takes_a_view_at_which_the_arm_keeps_off_what_stands_near(planner: ArmPlanner) -> None:
+    # drawer-only 1011 (tuning-wide): the way to a look into a drawer just opened pushed it 8 cm back
+    # in, and the hand closing it later closed on nothing where its handle had been.
+    look = np.array([0.3, 0.1, 0.85])
+    plain = planner.plan_look(np.array(STOWED), BASE, look, surface_z=SURFACE)
+    hand = _tcp(planner, plain.final_q)[:3, 3]
+    in_the_way = box_points(hand, np.array([0.08, 0.08, 0.08]), step_m=0.01)
+    touching = Clearance(planner, base_transform(BASE), None, in_the_way)
+    assert touching.problem(plain.final_q, hand=True) is not None
+    kept = planner.plan_look(np.array(STOWED), BASE, look, surface_z=SURFACE, keep_off=in_the_way)
+    assert kept.info["clear"] and (kept.info["standoff_m"], kept.info["pitch_deg"]) != (
+        plain.info["standoff_m"], plain.info["pitch_deg"])
+    assert all(touching.path_problem(step.samples, hand=True) is None for step in kept.steps if step.kind == "move")
+    camera = kept.info["camera_pose"]
+    assert np.linalg.norm(camera[:3, 3] - look) == pytest.approx(kept.info["standoff_m"], abs=0.01)
