@@ -24,7 +24,7 @@ from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
 from agent.planning.route import Routes
 from agent.pose import Pose2D
-from skills.arm.drive_clear import clear_path
+from skills.arm.drive_clear import clear_path, fold_place
 from skills.arm.grasps import hand_corners
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlanError
@@ -154,7 +154,10 @@ class RobotBody:
         the arm touches something, it is folded in and the base drives on from where it stopped,
         unless ``may_fold`` is false: a door this robot opened still stands open, it swings out
         towards the robot, and the folding arm would sweep through it (the drive fails then, as it
-        would have). Folding it first every time would do the same.
+        would have). Folding it first every time would do the same; but where the arm, as it is,
+        would touch a part standing open once the base is at ``pose`` (the robot coming back to the
+        stand of a door it opened), it is folded in where the drive has backed away from the part,
+        if that fold keeps clear of it (`skills.arm.drive_clear.fold_place`).
 
         Args:
             pose: where the base is to stand.
@@ -188,7 +191,19 @@ class RobotBody:
             arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
                 path = [list(xy) for xy in clear_path(here, pose, hand_corners(arm["tcp_pose"]), standing_open)]
-        reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": pose[2]}).meta
+                surface_z = self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)
+                fold_at = fold_place(self.planner(), arm["q"], path, pose, here[2], standing_open, surface_z)
+                if fold_at is not None:
+                    reply = self._drive_along(fold_at, here[2])
+                    if not reply.get("reached"):
+                        return reply
+                    self.run(STOW, surface_z=surface_z)
+                    path = path[2:]
+        return self._drive_along(path, pose[2])
+
+    def _drive_along(self, path: list[list[float]], yaw: float) -> dict[str, Any]:
+        """One move_base command along ``path`` (x, y waypoints), turning to ``yaw`` at the end; the reply."""
+        reply: dict[str, Any] = self.link.call("move_base", {"path": path, "yaw": yaw}).meta
         if isinstance(reply.get("base_pose"), list):
             self.pose = Pose2D.of(reply["base_pose"])
         return reply

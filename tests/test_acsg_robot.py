@@ -207,3 +207,10 @@ def test_a_box_with_no_clear_way_out_of_its_drawer_is_left_there_and_the_chest_a
     row = run_robot("recursive", 1018)
     assert any("none is taken unchecked" in failed for failed in row["failed_actions"]), row["failed_actions"]
     assert row["state_recovered"]
+
+
+def test_a_base_coming_back_to_a_door_it_opened_folds_the_arm_before_it_comes_forward() -> None:
+    # drawer-door 1011 (tuning-wide): driving back to the stand of the door it had opened, to shut
+    # it, with its arm out as a look into a drawer had left it, the robot drove the arm into the
+    # door's handle; the door stayed open and the drawer beside it was never reached.
+    _explored_and_put_back("drawer-door", 1011)

@@ -1,4 +1,5 @@
-"""A straight drive with the arm out keeps the hand off the doors and drawers the robot left open."""
+"""A straight drive with the arm out keeps the hand off the doors and drawers the robot left open, and an
+arm that would stand in one where the base is going is folded in first, where its fold keeps clear."""
 
 from __future__ import annotations
 
@@ -7,7 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from skills.arm.drive_clear import CLEAR_M, clear_path
+from skills.arm.arm_model import READY
+from skills.arm.clearance import Clearance
+from skills.arm.drive_clear import CLEAR_M, FOLD_BACK_M, clear_path, fold_place
+from skills.arm.fold_plans import plan_stow
+from skills.arm.frames import base_transform
+from skills.arm.planner import ArmPlanner
+from worlds.robot import CameraConfig
+from worlds.robot_arm import robot_description
 
 #: The base faces the table (+y) from y = -0.8 and slides along its edge, the hand 0.45 m ahead of it.
 HERE, THERE = (0.0, -0.8, math.pi / 2), (0.6, -0.8, math.pi / 2)
@@ -44,3 +52,32 @@ def test_a_door_standing_open_across_the_hand_s_way_is_passed_behind() -> None:
 ])
 def test_a_clear_way_is_driven_straight(standing_open) -> None:
     assert clear_path(HERE, THERE, HAND, standing_open) == [pytest.approx(THERE[:2])]
+
+
+@pytest.fixture(scope="module")
+def planner() -> ArmPlanner:
+    return ArmPlanner.from_description(robot_description(CameraConfig()))
+
+
+def test_an_arm_that_would_stand_in_an_open_door_is_folded_where_the_fold_keeps_clear_of_it(
+        planner: ArmPlanner) -> None:
+    # recursive 1008, drawer-door 1011 (tuning-wide): coming back to the stand of a door it had
+    # opened, its arm out as a look elsewhere had left it, the robot drove the arm into the door.
+    q = np.array(READY)
+    way = [[0.0, -1.0], [0.6, -1.0], [0.6, -0.8]]  # backed away 0.2 m, along, and forward onto THERE
+    hand = (base_transform(THERE) @ planner.kin.forward(q))[:3, 3]
+    door = _door(hand[0] + 0.02, front_y=hand[1] - 0.05) + np.array([0.0, 0.0, hand[2] - 0.95])
+    assert Clearance(planner, base_transform(THERE), None, door).problem(q, hand=True) is not None
+    folded_at = fold_place(planner, q, way, THERE, math.pi / 2, [door], surface_z=None)
+    assert folded_at is not None
+    back = folded_at[0][1] - way[0][1]
+    assert back in [pytest.approx(-extra) for extra in FOLD_BACK_M]
+    assert folded_at[1] == pytest.approx([way[1][0], way[1][1] + back])
+    backed = (folded_at[1][0], folded_at[1][1], math.pi / 2)
+    fold = plan_stow(planner, q, backed)
+    clearance = Clearance(planner, base_transform(backed), None, door)
+    assert all(clearance.path_problem(step.samples, hand=True) is None for step in fold.steps if step.kind == "move")
+    # an arm clear of the door where the base is going is not folded, nor on a straight drive
+    aside = door + np.array([1.0, 0.0, 0.0])
+    assert fold_place(planner, q, way, THERE, math.pi / 2, [aside]) is None
+    assert fold_place(planner, q, [list(THERE[:2])], THERE, math.pi / 2, [door]) is None
