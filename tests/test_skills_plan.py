@@ -555,3 +555,17 @@ def test_a_look_takes_a_view_at_which_the_arm_keeps_off_what_stands_near(planner
     assert all(touching.path_problem(step.samples, hand=True) is None for step in kept.steps if step.kind == "move")
     camera = kept.info["camera_pose"]
     assert np.linalg.norm(camera[:3, 3] - look) == pytest.approx(kept.info["standoff_m"], abs=0.01)
+
+
+def test_a_short_free_move_to_a_posture_that_touches_is_planned(planner: ArmPlanner) -> None:
+    # occlusion 1031 (tuning-wide): a close whose free move lay wholly within ESCAPE_RAD of a goal
+    # that touches its door left nothing to check, and the plan failed with an IndexError.
+    goal = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.9), 0.2, surface_z=SURFACE).steps[0].waypoints[-1]
+    skeleton = Clearance(planner, base_transform(BASE), SURFACE).sphere_sets(goal)[0]
+    below_elbow = skeleton[len(skeleton) // 2] - np.array([0.0, 0.0, LINK_RADIUS_M + CLEARANCE_M / 2])
+    clearance = Clearance(planner, base_transform(BASE), SURFACE, below_elbow[None, :].repeat(4, axis=0))
+    near = goal.copy()
+    near[-1] += ESCAPE_RAD / 2
+    builder = PlanBuilder(planner, near, BASE, SURFACE, clearance)
+    builder.free_move("to the pre-grasp pose of the drawer handle", goal)
+    assert builder.q == pytest.approx(goal) and builder.steps[-1].samples[-1] == pytest.approx(goal, abs=1e-6)

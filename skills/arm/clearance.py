@@ -233,7 +233,7 @@ class Clearance:
 
     def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1,
                      hand: bool = False) -> str | None:
-        """The first problem along joint waypoints (every ``every``-th, and the last).
+        """The first problem along joint waypoints (every ``every``-th, and the last); None for none.
 
         Args:
             waypoints: (n, dof) joint positions.
@@ -245,6 +245,8 @@ class Clearance:
             The reason, or None.
         """
         waypoints = np.atleast_2d(waypoints)
+        if not waypoints.size:
+            return None
         for k in np.unique(np.r_[np.arange(0, len(waypoints), every), len(waypoints) - 1]):
             problem = self.problem(waypoints[k], carried, hand)
             if problem is not None:
