@@ -146,7 +146,7 @@ class RobotBody:
         return self.context.planner
 
     def drive(self, pose: Pose2D, routes: Routes | None = None, *, may_fold: bool = True,
-              standing_open: Sequence[np.ndarray] = ()) -> None:
+              standing_open: Sequence[np.ndarray] = (), fold_first: bool = False) -> None:
         """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
         The arm is left where the last skill left it (backed off ahead of the base), which the
         world checks on the way; a straight drive whose hand would cross a part this robot left
@@ -154,21 +154,25 @@ class RobotBody:
         the arm touches something, it is folded in and the base drives on from where it stopped,
         unless ``may_fold`` is false: a door this robot opened still stands open, it swings out
         towards the robot, and the folding arm would sweep through it (the drive fails then, as it
-        would have). Folding it first every time would do the same; but where the arm, as it is,
-        would touch a part standing open once the base is at ``pose`` (the robot coming back to the
-        stand of a door it opened), it is folded in where the drive has backed away from the part,
-        if that fold keeps clear of it (`skills.arm.drive_clear.fold_place`).
+        would have). Folding it first every time would do the same; but with ``fold_first`` (the
+        robot coming back to the stand of a door it opened), where the arm, as it is, would touch a
+        part standing open once the base is at ``pose``, it is folded in where the drive has backed
+        away from the part, if that fold keeps clear of it (`skills.arm.drive_clear.fold_place`).
+        Only then: folded on its way elsewhere, the arm later came out of the stowed pose to the
+        handle of the door it had left open by no way clear of that door (drawer-door 1094 of
+        tuning-wide).
 
         Args:
             pose: where the base is to stand.
             routes: paths over the robot's map, or None to drive straight.
             may_fold: whether the arm may be folded in when it touches something on the way.
             standing_open: point sets of the doors and drawers this robot opened that still stand open.
+            fold_first: fold the arm in on the way where it would stand in a part left open.
 
         Raises:
             SkillPlanError: the base did not get there.
         """
-        reply = self._move_base(pose, routes, standing_open)
+        reply = self._move_base(pose, routes, standing_open, fold_first)
         if not reply.get("reached") and may_fold:
             arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
@@ -180,7 +184,7 @@ class RobotBody:
                                  f"{math.degrees(pose[2]):.0f}°): it touched {touched}")
 
     def _move_base(self, pose: Pose2D, routes: Routes | None,
-                   standing_open: Sequence[np.ndarray] = ()) -> dict[str, Any]:
+                   standing_open: Sequence[np.ndarray] = (), fold_first: bool = False) -> dict[str, Any]:
         """One move_base command towards ``pose`` (see `drive`); the world's reply."""
         path = [[pose[0], pose[1]]]
         here = self.pose
@@ -192,7 +196,8 @@ class RobotBody:
             if not arm["stowed"]:
                 path = [list(xy) for xy in clear_path(here, pose, hand_corners(arm["tcp_pose"]), standing_open)]
                 surface_z = self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)
-                fold_at = fold_place(self.planner(), arm["q"], path, pose, here[2], standing_open, surface_z)
+                fold_at = fold_place(self.planner(), arm["q"], path, pose, here[2], standing_open,
+                                     surface_z) if fold_first else None
                 if fold_at is not None:
                     reply = self._drive_along(fold_at, here[2])
                     if not reply.get("reached"):

@@ -127,17 +127,20 @@ class DoorsAndDrawers:
             found.append(np.vstack([part.points(), *children]))
         return found
 
-    def drive(self, pose: Pose2D, routes: Routes | None = None) -> None:
+    def drive(self, pose: Pose2D, routes: Routes | None = None, coming_back: bool = False) -> None:
         """Drive the base to ``pose`` knowing what this robot left open (see `RobotBody.drive`).
 
         Args:
             pose: where the base is to stand.
             routes: paths over the robot's map, or None to drive straight.
+            coming_back: the base comes back to the stand of a part it opened, to close it (the
+                arm may be folded on the way: `RobotBody.drive`'s ``fold_first``).
 
         Raises:
             SkillPlanError: the base did not get there.
         """
-        self.body.drive(pose, routes, may_fold=self.may_fold(), standing_open=self.standing_open())
+        self.body.drive(pose, routes, may_fold=self.may_fold(), standing_open=self.standing_open(),
+                        fold_first=coming_back)
 
     def open_part(self, part: Instance, handle: int | None = None) -> SkillResult:
         """Stand before the door or drawer ``part``, open it by ``handle``, look inside; the frames
@@ -357,7 +360,7 @@ class DoorsAndDrawers:
             del self.opened[part.id]
             return SkillResult(True)
         if not opened.held:
-            self.drive(opened.stand)
+            self.drive(opened.stand, coming_back=True)
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
                           held=opened.held, keep_off=self.near(part), part_points=self.own_points(part))
