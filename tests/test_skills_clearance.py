@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from skills.arm.arm_model import READY
-from skills.arm.clearance import CLEARANCE_M, LINK_RADIUS_M, Carried, Clearance, box_points, link_spheres
+from skills.arm.clearance import CLEARANCE_M, LINK_RADIUS_M, Carried, Clearance, box_points
+from skills.arm.link_shells import link_spheres
 from skills.arm.frames import base_transform
 from skills.arm.planner import ArmPlanner
 from worlds.robot import CameraConfig

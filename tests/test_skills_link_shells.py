@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from skills.arm.arm_model import READY
-from skills.arm.clearance import CLEARANCE_M, Clearance, link_spheres
+from skills.arm.clearance import CLEARANCE_M, Clearance
 from skills.arm.frames import base_transform
-from skills.arm.link_shells import LINK_RADIUS_M, SLACK_M, bulge_centres, collision_vertices, rigid_segments
+from skills.arm.link_shells import (LINK_RADIUS_M, SLACK_M, bulge_centres, collision_vertices, link_spheres,
+                                   rigid_segments)
 from skills.arm.planner import ArmPlanner
 from worlds.robot import CameraConfig
 from worlds.robot_arm import robot_description

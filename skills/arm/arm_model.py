@@ -15,7 +15,7 @@ import numpy as np
 from agent.pose import Pose2D
 from skills.arm.frames import base_transform
 from skills.arm.kinematics import ArmKinematics
-from skills.arm.link_shells import link_bulges
+from skills.arm.link_shells import link_bulges, link_tubes
 from skills.arm.skill_plan import CAREFUL_SPEED, FREE_SPEED, SkillPlanError, Step
 from skills.arm.trajectory import JointLimits, plan_trajectory
 
@@ -78,7 +78,9 @@ class ArmModel:
         self.lift_index: int | None = lifts[0] if lifts else None
         #: The first joint of the skeleton kept clear of things: the lift's origin sits in the base.
         self.skeleton_first = 0 if self.lift_index is None else self.lift_index + 1
-        #: Where each of the skeleton's links bulges out of the tube round it (`skills.arm.link_shells`).
+        #: Each of the skeleton's links as spheres in its own frame (`skills.arm.link_shells`): along
+        #: the skeleton, and where it bulges out of the tube round it.
+        self.link_tubes = link_tubes(self.kin, self.skeleton_first)
         self.link_bulges = link_bulges(urdf_xml, self.kin, self.skeleton_first)
 
     @classmethod

@@ -9,9 +9,9 @@ what the links would touch: the links are spheres strung along the arm's skeleto
 of successive revolute joints and the corners where a link turns between two of them
 (`skills.arm.kinematics.ArmKinematics.skeleton`; `LINK_RADIUS_M` round: the Panda's links are
 ~12 cm thick), and where a link's mesh bulges out of that tube, spheres fixed to the link
-(`skills.arm.link_shells`: the wrist's housing); the table is the surface the plan works over, what stands near is the memory's points, and what the
-hand carries is a box fixed to the TCP. The segment from the last joint to the TCP is the hand's,
-left to its boxes.
+(`skills.arm.link_shells`: the wrist's housing); the table is the surface the plan works over,
+what stands near is the memory's points, and what the hand carries is a box fixed to the TCP. The
+segment from the last joint to the TCP is the hand's, left to its boxes.
 
 Pure: an `ArmModel`, the base's pose and points in, a reason or None out.
 """
@@ -28,8 +28,6 @@ from skills.arm.arm_model import ArmModel
 from skills.arm.grasps import hand_touches
 from skills.arm.link_shells import LINK_RADIUS_M
 
-#: The spacing of the spheres along each segment (m).
-SPHERE_STEP_M = 0.04
 #: How far (m) the links keep above a surface, from other points and from what the hand carries.
 CLEARANCE_M = 0.01
 #: How far from the TCP (m) the hand and its open fingers reach at most.
@@ -39,24 +37,6 @@ SUPPORT_M = 0.02
 #: Points of what stands near within reach of a link that count as touching it: a voxel or two is
 #: the memory's noise.
 TOUCHING_POINTS = 3
-
-
-def link_spheres(skeleton: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarray:
-    """Sphere centres along the segments between successive points of the arm's skeleton.
-
-    Args:
-        skeleton: (k, 3) points along the chain, shoulder first.
-        step_m: the most the centres lie apart along a segment.
-
-    Returns:
-        (M, 3) centres: each point, and points between successive ones.
-    """
-    skeleton = np.asarray(skeleton, dtype=float)
-    centres = [skeleton[:1]]
-    for start, end in zip(skeleton[:-1], skeleton[1:]):
-        count = max(1, math.ceil(float(np.linalg.norm(end - start)) / step_m))
-        centres.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
-    return np.vstack(centres)
 
 
 def _outside(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -169,11 +149,11 @@ class Clearance:
         Returns:
             (M, 3) and (B, 3) centres.
         """
-        arm, base = self.arm, self.base
-        skeleton = link_spheres(arm.kin.skeleton(q, arm.skeleton_first))
-        frames = base @ arm.kin.link_frames(q, arm.skeleton_first)
-        bulges = [centres @ frame[:3, :3].T + frame[:3, 3] for frame, centres in zip(frames, arm.link_bulges)]
-        return skeleton @ base[:3, :3].T + base[:3, 3], np.vstack([np.zeros((0, 3)), *bulges])
+        arm = self.arm
+        frames = self.base @ arm.kin.link_frames(q, arm.skeleton_first)
+        tube, bulges = ([centres @ frame[:3, :3].T + frame[:3, 3] for frame, centres in zip(frames, local)]
+                        for local in (arm.link_tubes, arm.link_bulges))
+        return np.vstack([frames[0][None, :3, 3], *tube]), np.vstack([np.zeros((0, 3)), *bulges])
 
     def spheres(self, q: np.ndarray) -> np.ndarray:
         """All the links' sphere centres (world) for joint positions ``q`` (`sphere_sets`).

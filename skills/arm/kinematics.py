@@ -118,6 +118,7 @@ class ArmKinematics:
                 raise ValueError(f"joints: {name!r} needs finite limits with lower ≤ upper, got [{lo}, {hi}]")
         self._reach = Reach.of(self.model, self._frame, self.joint_names, self.lower, self.upper,
                                self.full_configuration)
+        self._lines: dict[int, tuple[tuple[str, np.ndarray], ...]] = {}
 
     @property
     def dof(self) -> int:
@@ -184,7 +185,7 @@ class ArmKinematics:
         pin.framesForwardKinematics(self.model, self.data, self._model_q(q))
         return self.data.oMf[self._frame].homogeneous.copy()
 
-    def link_lines(self, first: int = 0) -> list[tuple[str, np.ndarray]]:
+    def link_lines(self, first: int = 0) -> tuple[tuple[str, np.ndarray], ...]:
         """The arm's skeleton link by link, each in its own frame: for each controlled joint from the
         ``first`` on but the last, the joint's name and the polyline its link runs along, from the
         joint's origin to the next joint's, by way of the corner where the link turns when the next
@@ -197,15 +198,20 @@ class ArmKinematics:
             first: the first joint (in the order of ``joints``) the skeleton starts at.
 
         Returns:
-            (joint name, (k, 3) points in that joint's frame), in order along the chain.
+            (joint name, (k, 3) points in that joint's frame), in order along the chain; worked out
+            once per ``first`` (the clearance checks ask at every posture), read-only.
         """
-        lines = []
-        for name, child in zip(self.joint_names[first:-1], self._joint_ids[first + 1:], strict=True):
-            offset = self.model.jointPlacements[child].translation.copy()
-            turns = abs(offset[0]) > 1e-6 and np.linalg.norm(offset[1:]) > 1e-6
-            corner = [np.array([offset[0], 0.0, 0.0])] if turns else []
-            lines.append((name, np.array([np.zeros(3), *corner, offset])))
-        return lines
+        if first not in self._lines:
+            lines = []
+            for name, child in zip(self.joint_names[first:-1], self._joint_ids[first + 1:], strict=True):
+                offset = self.model.jointPlacements[child].translation.copy()
+                turns = abs(offset[0]) > 1e-6 and np.linalg.norm(offset[1:]) > 1e-6
+                corner = [np.array([offset[0], 0.0, 0.0])] if turns else []
+                line = np.array([np.zeros(3), *corner, offset])
+                line.flags.writeable = False
+                lines.append((name, line))
+            self._lines[first] = tuple(lines)
+        return self._lines[first]
 
     def link_frames(self, q: np.ndarray, first: int = 0) -> np.ndarray:
         """Where the controlled joints' frames are, from the ``first`` on.

@@ -1,7 +1,7 @@
-"""Where the arm's links bulge out of the tube round their skeleton.
+"""The arm's links as spheres: along their skeleton, and where they bulge out of the tube round it.
 
 `skills.arm.clearance` strings spheres of `LINK_RADIUS_M` along the skeleton, the lines between
-the joints' origins. Most of a link lies within that tube, but not all: the Panda's wrist housing
+the joints' origins (`link_spheres`, fixed to each link once: `link_tubes`). Most of a link lies within that tube, but not all: the Panda's wrist housing
 (link 5) hangs 10 cm below the forearm's axis, where it caught a box's corner that the tube kept
 clear of. Here each link's collision mesh, read from the URDF, is checked against its own stretch
 of the skeleton, and the vertices outside the tube get spheres of their own, fixed to the link.
@@ -24,9 +24,29 @@ log = logging.getLogger(__name__)
 
 #: The links' radius around their skeleton (m).
 LINK_RADIUS_M = 0.065
+#: The spacing of the spheres along each segment of the skeleton (m).
+SPHERE_STEP_M = 0.04
 #: A vertex within this of the tube or of a bulge's sphere counts as covered (m): the mesh is a
 #: link's outline, not a thing to follow to the millimetre.
 SLACK_M = 0.01
+
+
+def link_spheres(skeleton: np.ndarray, step_m: float = SPHERE_STEP_M) -> np.ndarray:
+    """Sphere centres along the segments between successive points of the arm's skeleton.
+
+    Args:
+        skeleton: (k, 3) points along the chain, shoulder first.
+        step_m: the most the centres lie apart along a segment.
+
+    Returns:
+        (M, 3) centres: each point, and points between successive ones.
+    """
+    skeleton = np.asarray(skeleton, dtype=float)
+    centres = [skeleton[:1]]
+    for start, end in zip(skeleton[:-1], skeleton[1:]):
+        count = max(1, math.ceil(float(np.linalg.norm(end - start)) / step_m))
+        centres.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
+    return np.vstack(centres)
 
 
 def _rotation_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -152,6 +172,21 @@ def rigid_segments(kin: ArmKinematics, first: int, postures: np.ndarray) -> list
         still = np.abs(local - local[0]).max(axis=(0, 2, 3)) < 1e-6
         rigid.append(local[0][still])
     return rigid
+
+
+def link_tubes(kin: ArmKinematics, first: int) -> list[np.ndarray]:
+    """Each link's `link_spheres` along its stretch of `ArmKinematics.link_lines` from ``first``, in
+    its own frame: worked out once, moved with the link at each posture.
+
+    Args:
+        kin: the arm's kinematics.
+        first: the first joint of the skeleton.
+
+    Returns:
+        (M, 3) centres in each link's frame, its joint's origin left out (the link before ends
+        there; the first joint's origin is the caller's).
+    """
+    return [link_spheres(line)[1:] for _, line in kin.link_lines(first)]
 
 
 def link_bulges(urdf_xml: str, kin: ArmKinematics, first: int, seed: int = 0) -> list[np.ndarray]:
