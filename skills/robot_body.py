@@ -195,16 +195,27 @@ class RobotBody:
             arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
                 path = [list(xy) for xy in clear_path(here, pose, hand_corners(arm["tcp_pose"]), standing_open)]
-                surface_z = self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)
-                fold_at = fold_place(self.planner(), arm["q"], path, pose, here[2], standing_open,
-                                     surface_z) if fold_first else None
-                if fold_at is not None:
-                    reply = self._drive_along(fold_at, here[2])
-                    if not reply.get("reached"):
-                        return reply
-                    self.run(STOW, surface_z=surface_z)
-                    path = path[2:]
+                if fold_first:
+                    folded = self._fold_on_the_way(pose, path, arm, standing_open)
+                    if folded is not None and not folded.get("reached"):
+                        return folded
+                    path = path if folded is None else path[2:]
         return self._drive_along(path, pose[2])
+
+    def _fold_on_the_way(self, pose: Pose2D, path: list[list[float]], arm: dict[str, Any],
+                         standing_open: Sequence[np.ndarray]) -> dict[str, Any] | None:
+        """Drive to where the arm is to be folded on ``path`` (`skills.arm.drive_clear.fold_place`)
+        and fold it there; the drive's reply, or None when it is not to be folded."""
+        assert self.pose is not None
+        heading = self.pose[2]
+        surface_z = self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M)
+        fold_at = fold_place(self.planner(), arm["q"], path, pose, heading, standing_open, surface_z)
+        if fold_at is None:
+            return None
+        reply = self._drive_along(fold_at, heading)
+        if reply.get("reached"):
+            self.run(STOW, surface_z=surface_z)
+        return reply
 
     def _drive_along(self, path: list[list[float]], yaw: float) -> dict[str, Any]:
         """One move_base command along ``path`` (x, y waypoints), turning to ``yaw`` at the end; the reply."""

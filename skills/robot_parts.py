@@ -246,48 +246,28 @@ class DoorsAndDrawers:
                         hold: bool) -> ArmResult:
         return self.body.run(f"open_{geometry.kind}", geometry=geometry, amount=amount,
                              surface_z=self.body.surface_z(geometry.handle_point), label=f"{part.label} {part.id}",
-                             hold=hold, keep_off=self.near(part), part_points=self.own_points(part))
+                             hold=hold, **self.keep_off(part))
 
-    def near(self, part: Instance) -> np.ndarray:
-        """The points of what stands near a door or drawer, for the arm to keep off while it opens or
-        closes it: everything remembered but the piece it belongs to with all that piece's parts
-        and handles, and what stands inside that piece or inside the part's box raised to the
-        piece's top (the things in an open drawer). A box standing before a low drawer is kept
-        off: the forearm came down on one while the hand pulled the drawer, and let go of the
-        handle 4.4 cm out (recursive 1022 of tuning-wide).
+    def keep_off(self, part: Instance) -> dict[str, np.ndarray]:
+        """What the arm keeps off while it opens or closes a door or drawer, as the part skills'
+        ports take it (world points, (N, 3) each):
 
-        Args:
-            part: the door or drawer.
-
-        Returns:
-            (N, 3) world points.
-        """
-        piece, family = self._family(part)
-        boxes = [box for box in (piece.bounds, part.bounds) if np.all(np.isfinite(box[0]))]
-        if len(boxes) == 2:
-            lo, hi = boxes[1]
-            boxes[1] = (lo, np.r_[hi[:2], max(hi[2], boxes[0][1][2])])
-        return self.body.points_near(family, boxes, PIECE_MARGIN_M)
-
-    def own_points(self, part: Instance) -> np.ndarray:
-        """The points of a door or drawer and of every handle of the piece it belongs to, where the
-        memory holds them now (an open part's carried along by the skill that opened it), for the
-        free move to its handle to keep off: `near` leaves them all out, and on its way to a door's
-        handle a finger caught the handle of the drawer beside it (drawer-door 1007 of tuning-wide).
+        - ``keep_off``, what stands near: everything remembered but the piece the part belongs to
+          with all that piece's parts and handles, and what stands inside that piece or inside the
+          part's box raised to the piece's top (the things in an open drawer). A box standing
+          before a low drawer is kept off: the forearm came down on one while the hand pulled the
+          drawer, and let go of the handle 4.4 cm out (recursive 1022 of tuning-wide);
+        - ``part_points``, the part and every handle of its piece where the memory holds them now
+          (an open part's carried along by the skill that opened it), for the free move to its
+          handle: on its way to a door's handle a finger caught the handle of the drawer beside it
+          (drawer-door 1007 of tuning-wide).
 
         Args:
             part: the door or drawer.
 
         Returns:
-            (N, 3) world points.
+            The two point sets by port name.
         """
-        memory = self.body.memory
-        handles = [memory.get(i).points() for i in self._family(part)[1] if memory.get(i).label == "handle"]
-        return np.vstack([part.points(), *handles])
-
-    def _family(self, part: Instance) -> tuple[Instance, set[int]]:
-        """The piece a door or drawer belongs to (the part itself where it is seen on its own), and
-        the memory ids of the piece, the part and all that hangs under them."""
         memory = self.body.memory
         parent = memory.instances.get(part.parent) if part.parent is not None else None
         piece = parent if parent is not None and not parent.gone else part
@@ -297,7 +277,13 @@ class DoorsAndDrawers:
             if inst.id not in family:
                 family.add(inst.id)
                 todo.extend(inst.children)
-        return piece, family
+        boxes = [box for box in (piece.bounds, part.bounds) if np.all(np.isfinite(box[0]))]
+        if len(boxes) == 2:
+            lo, hi = boxes[1]
+            boxes[1] = (lo, np.r_[hi[:2], max(hi[2], boxes[0][1][2])])
+        handles = [memory.get(i).points() for i in family if memory.get(i).label == "handle"]
+        return {"keep_off": self.body.points_near(family, boxes, PIECE_MARGIN_M),
+                "part_points": np.vstack([part.points(), *handles])}
 
     def _seen_opening(self, geometry: PartGeometry, part: Instance, handle: int, reported: float,
                       moved: float = 0.0) -> float:
@@ -363,7 +349,7 @@ class DoorsAndDrawers:
             self.drive(opened.stand, coming_back=True)
         result = body.run(f"close_{opened.geometry.kind}", geometry=opened.geometry, amount=opened.amount,
                           surface_z=body.surface_z(opened.geometry.handle_point), label=f"{part.label} {part.id}",
-                          held=opened.held, keep_off=self.near(part), part_points=self.own_points(part))
+                          held=opened.held, **self.keep_off(part))
         # A drawer is pushed on past where it was seen shut until it meets its end stop, and the hand
         # may go on a little further than the part; the memory holds a shut part where it was seen shut.
         left = opened.amount if result.achieved is None else max(result.achieved, 0.0)

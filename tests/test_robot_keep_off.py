@@ -42,13 +42,13 @@ def test_a_drawer_keeps_the_arm_off_its_neighbours_but_not_off_its_own_chest_and
     other_handle = _remember(robot, "handle", (0.0, 0.23, 0.95), (0.1, 0.02, 0.02), other)
     mug = _remember(robot, "mug", (0.05, 0.05, 0.87), (0.08, 0.08, 0.1))  # in the open drawer, over its front
     box = _remember(robot, "box", (0.35, -0.2, 0.8), (0.12, 0.12, 0.1))  # standing before the chest, aside
-    near = robot.parts.near(drawer)
+    near = robot.parts.keep_off(drawer)["keep_off"]
     assert len(near) == len(box.points())
     assert np.all(near[:, 0] > 0.28) and np.all(near[:, 1] < -0.13)  # the box's points, and only they
     # the drawer above: its chest left out too, but what stands in the open drawer below, outside
     # the chest and not in this drawer, is in the way
-    assert len(robot.parts.near(other)) == len(box.points()) + len(mug.points())
+    assert len(robot.parts.keep_off(other)["keep_off"]) == len(box.points()) + len(mug.points())
     # the drawer itself and every handle of its chest, where they stand now, for the free move to
     # the handle; not the chest's body, nor the drawer above, nor what stands about
-    own = robot.parts.own_points(drawer)
+    own = robot.parts.keep_off(drawer)["part_points"]
     assert len(own) == len(drawer.points()) + len(handle.points()) + len(other_handle.points())

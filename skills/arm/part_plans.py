@@ -15,8 +15,9 @@ near: `skills.arm.clearance.Clearance`), first until one along which the whole a
 keep clear of it, and the free move to the staging pose takes a route that does; with
 ``part_points`` that free move keeps off the part itself too. With ``surface_z`` (a table's top)
 variants whose hand would come down onto it are refused (`skills.arm.grasps.HAND_BOXES`): a bar
-less than ~9 cm above the table cannot be grasped by a Panda hand 21 cm tall across its fingers. A drawer's bar is then grasped from above, the fingers closed and their tips brought down
-onto it until they touch (`skills.arm.grasps.handle_top_grasps`). An opening may end holding the
+less than ~9 cm above the table cannot be grasped by a Panda hand 21 cm tall across its fingers.
+A drawer's bar is then grasped from above, the fingers closed and their tips brought down onto it
+until they touch (`skills.arm.grasps.handle_top_grasps`). An opening may end holding the
 handle (``hold``); `plan_close_held` then pushes the part shut from that grasp.
 """
 
@@ -204,11 +205,12 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     hand keep clear of it, and the links of ``part_points`` on the way in, is taken
     (`_part_chains`, `_chain_problem`), and the free move to it keeps clear of both; where none
     does, the plan is the one made without them: the first chain that reaches, its free move kept
-    off only ``part_points``. What stands near is known only by the
-    points seen of it, and a posture that touches a voxel of it is still better than no plan. The
-    part itself is kept off by the free move alone: the approach, the grasp and the part's path
-    are on it (occlusion 1009 of tuning-wide: on its way to an open door's handle, a finger
-    came down on it, and the door was left open).
+    off only ``part_points``. What stands near is known only by the points seen of it, and a
+    posture that touches a voxel of it is still better than no plan. The hand is on the part
+    from the grasp on, and the part moves: its points count for the links on the way in and for
+    the free move, not for the hand at the grasp or along the part's path (recursive 1025 of
+    tuning-wide: on its way to an open door's handle, the arm came down on the door, and the door
+    was left open).
     """
     what = f"{geometry.kind} handle"
     opening = end > start
@@ -228,6 +230,7 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
                  for points in (keep_off, part_points))
     clearance = Clearance(arm, base, surface_z, near) if len(near) else None
     itself = Clearance(arm, base, surface_z, own) if len(own) else None
+    checked = clearance is not None or itself is not None
     builder = PlanBuilder(arm, here, base_pose, surface_z, itself)
     failures: dict[str, list[str]] = {}
     # the chain taken without the check: the first that reaches, of the first variant that has one
@@ -240,14 +243,14 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
             tried.append(refusal)
             continue
         for chain in _part_chains(ik, poses, what, opening, way.touch, tried):
-            if clearance is None and itself is None:
+            if not checked:
                 fallback = fallback or (way, poses, chain)
                 break
             if _chain_problem(clearance, itself, chain) is None:
                 builder.clearance = Clearance(arm, base, surface_z, np.vstack([near, own]))
                 return _build(builder, ik, geometry, way, poses, chain, (start, end), shut, skill, hold, clear=True)
             fallback = fallback or (way, poses, chain)
-        if clearance is None and itself is None and fallback is not None:
+        if not checked and fallback is not None:
             break
     if fallback is not None:
         return _build(builder, ik, geometry, *fallback, (start, end), shut, skill, hold, clear=False)
@@ -283,11 +286,11 @@ def _chain_problem(near: Clearance | None, itself: Clearance | None, chain: _Cha
     """What the arm or the hand would touch of what stands near along a part's chain, or what the
     links would touch of the part itself on the way in to its handle (every other waypoint); None
     for nothing. The part is where it stands before the chain: once it moves, its points are not."""
-    swept, approach, retreat = chain
-    checks = [] if near is None else [lambda w=w: near.path_problem(w, every=2, hand=True) for w in chain]
-    if itself is not None:
-        checks.append(lambda: itself.path_problem(approach, every=2))
-    return next(filter(None, (check() for check in checks)), None)
+    for waypoints in chain if near is not None else ():
+        problem = near.path_problem(waypoints, every=2, hand=True)
+        if problem is not None:
+            return problem
+    return None if itself is None else itself.path_problem(chain[1], every=2)  # the approach
 
 
 def _part_chains(ik: IKSearch, poses: list[np.ndarray], what: str, opening: bool, touch: bool,

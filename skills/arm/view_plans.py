@@ -83,7 +83,8 @@ def plan_look(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, point: Sequence[f
             builder.clearance = clearance
             return _view(builder, arm, ik, goal, target, distance, pitch, skill, clear=clearance is not None)
     if fallback is not None:  # no view keeps clear: the first that reaches, its way unchecked
-        return _view(builder, arm, ik, *fallback[:1], target, *fallback[1:], skill, clear=False)
+        goal, distance, pitch = fallback
+        return _view(builder, arm, ik, goal, target, distance, pitch, skill, clear=False)
     raise SkillPlanError(best_failure(failures, "look"))
 
 
