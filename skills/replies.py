@@ -21,13 +21,16 @@ BLOCKED_RAD = 0.03
 ARRIVED_M = 0.015
 #: The share of a planned opening or closing the part must make for the skill to count it done.
 MIN_PART_SHARE = 0.6
+#: The ``robot_link`` of a contact the world reports for what the hand carries (docs/bus.md).
+HELD_CONTACT = "held object"
 #: What a grasp holds when it holds what the step expects, and what it says otherwise.
 _EXPECTED = {
     "handle": (lambda label: label.get("category") == "handle", "not a handle"),
     "object": (lambda label: label.get("link") is None, "part of a piece of furniture, not an object"),
-    # lowering what the hand carries: it arrives where that meets what it is put on, which the
-    # world reports as nothing the arm touched; the arm itself touching anything is no arrival
-    "support": (lambda label: False, "the arm itself, not what it carries"),
+    # lowering what the hand carries: it arrives where that meets what it is put on (a drawer's
+    # bottom, reported as the carried thing's contact; a table, not reported at all); the arm
+    # itself touching anything is no arrival
+    "support": (lambda label: label.get("robot_link") == HELD_CONTACT, "the arm itself, not what it carries"),
 }
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from agent.acsg.from_memory import Box
 from agent.acsg.interfaces import SkillResult
 from agent.acsg.keep_clear import kept_clear
-from agent.perception.grasp_poses import top_grasp_point
+from agent.perception.grasp_poses import LEAST_EXTENT_M, seen_extent, top_grasp_point
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
@@ -96,7 +96,7 @@ class Picks:
         if body.home is None:
             raise SkillPlanError("the robot has not looked yet")
         points = obj.points()
-        top, extent, box = top_grasp_point(points), np.ptp(points, axis=0), obj.bounds
+        top, extent, box = top_grasp_point(points), seen_extent(points), obj.bounds
         surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
@@ -134,7 +134,7 @@ class Picks:
         lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
         spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
         self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
-        places = spots + np.array([0.0, 0.0, top[2] - box[0][2]])
+        places = spots + np.array([0.0, 0.0, max(top[2] - box[0][2], LEAST_EXTENT_M)])  # its top, as it stands
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
                           surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
         if not result.ok:

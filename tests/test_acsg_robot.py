@@ -8,7 +8,7 @@ import pybullet as p
 import pytest
 
 from agent.acsg.graph import ACSG
-from agent.app.eval.robot_tabletop import in_world_ids, run_robot
+from agent.app.eval.robot_tabletop import in_world_ids, part_states, run_robot
 from agent.app.runtime.local_world import local_world
 from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
@@ -17,6 +17,9 @@ from agent.pose import Pose2D
 from skills.arm.skill_plan import SkillPlanError
 from skills.robot import Robot
 from worlds.bus.link import WorldLink
+from worlds.robot import CameraConfig
+from worlds.sim import World
+from worlds.tabletop import tabletop_variant
 
 pytestmark = pytest.mark.slow
 
@@ -146,6 +149,25 @@ def test_a_drawer_that_sticks_a_little_way_out_is_pushed_shut_again() -> None:
     assert not result.ok
     assert "did not open" in result.reason and result.reason.endswith("pushed shut again"), result.reason
     assert abs(left_at) < 0.005
+
+
+def test_a_drawer_pushed_in_past_its_closed_end_is_not_counted_as_shut() -> None:
+    # recursive 1039 (tuning-wide): a box lifted in the lower drawer pushed the closed drawer above
+    # 55 cm into the chest, and the evaluation counted it closed, as it had been.
+    scene = tabletop_variant("drawer-only", 0)
+    world = World(CameraConfig())
+    try:
+        world.start_tabletop(scene)
+        _, placement = scene.storage[0]
+        part = placement.model.parts[0]
+        piece = world.stage.built.storage[placement.furniture_id]
+        part_id = str(placement.part_ids()[part.name])
+        assert part_states(world, scene)[part_id] == 0.0
+        p.resetJointState(piece.body, piece.links[part.name], part.lower - 0.3 * (part.upper - part.lower),
+                          physicsClientId=world.client)
+        assert part_states(world, scene)[part_id] == -1.0
+    finally:
+        world.close()
 
 
 def test_a_wide_box_is_put_down_where_a_door_already_shut_again_swung() -> None:

@@ -13,10 +13,12 @@ import pytest
 
 from agent.perception.directions import GeometryError, front_normal, principal_axis, snap_handle_axis
 from agent.perception.grasp_poses import (
+    LEAST_EXTENT_M,
     closing_waypoints,
     grasp_pose,
     opening_waypoints,
     pregrasp_pose,
+    seen_extent,
     top_grasp_point,
 )
 from agent.perception.memory import InstanceMemory
@@ -261,3 +263,15 @@ def test_the_pick_point_is_the_mean_of_the_highest_points() -> None:
     body = rng.uniform((-0.04, -0.04, 0.75), (0.04, 0.04, 0.85), (400, 3))
     lid = np.column_stack([rng.uniform(0.0, 0.02, (50, 2)), np.full(50, 0.9)])
     assert np.allclose(top_grasp_point(np.vstack([body, lid])), (*lid[:, :2].mean(axis=0), 0.9))
+
+
+def test_a_thing_seen_only_from_above_still_has_some_height() -> None:
+    """A box in a drawer is seen through the opening, its top only: its points span no height, yet
+    a pick needs one (how deep to grasp, how high to lift); it gets two voxels' worth."""
+    rng = np.random.default_rng(5)
+    top_only = np.column_stack([rng.uniform(0.0, 0.14, (60, 1)), rng.uniform(0.0, 0.05, (60, 1)), np.full(60, 0.835)])
+    assert seen_extent(top_only) == pytest.approx([0.14, 0.05, LEAST_EXTENT_M], abs=0.005)
+    whole = rng.uniform((0.0, 0.0, 0.78), (0.1, 0.06, 0.85), (400, 3))
+    assert seen_extent(whole) == pytest.approx(np.ptp(whole, axis=0))
+    with pytest.raises(GeometryError, match="points"):
+        seen_extent(np.zeros((0, 3)))

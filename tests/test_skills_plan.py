@@ -314,6 +314,8 @@ def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_pl
     for q in steps["down to above the object"].samples[::3]:
         assert np.linalg.norm(_tcp(planner, q)[:2, 3] - above[:2, 3]) < 0.003
     assert steps["down to above the object"].stop_on_contact
+    # What it carries meeting a door or drawer stops the arm (the world reports it as a contact).
+    assert steps["lift"].stop_on_contact and steps["carry"].stop_on_contact
     depth = plan.info["grasp_depth_m"]
     grasp = _tcp(planner, steps["down onto the object"].samples[-1])
     assert grasp[:3, 3] == pytest.approx(top - [0, 0, depth], abs=0.002)

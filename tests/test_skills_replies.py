@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skills.arm.skill_plan import Step
-from skills.replies import ARRIVED_M, BLOCKED_RAD, step_problem
+from skills.replies import ARRIVED_M, BLOCKED_RAD, HELD_CONTACT, step_problem
 
 
 def _reply(final_error: float = 0.0, contacts: tuple = (), stopped: bool = False, held: dict | None = None,
@@ -27,6 +27,9 @@ CARRIED = {"category": "jar", "id": 9}
     ("support", _reply(final_error=2 * BLOCKED_RAD, stopped=True, held=CARRIED,
                        contacts=({"category": "drawer", "id": 4, "link": 1, "robot_link": "panda_hand"},)),
      "stopped on contact with drawer 4 (panda_hand)"),
+    # ... and where what it carries met a drawer's bottom, which the world reports as its contact
+    ("support", _reply(final_error=2 * BLOCKED_RAD, stopped=True, held=CARRIED,
+                       contacts=({"category": "drawer", "id": 4, "link": 1, "robot_link": HELD_CONTACT},)), ""),
     # ... nor where what it carried was lost on the way
     ("support", _reply(final_error=2 * BLOCKED_RAD), "short of its target"),
     # any other move held back so is short of its target

@@ -317,6 +317,40 @@ def test_a_picked_object_moves_with_the_hand_and_stays_where_it_is_put_down() ->
         world.close()
 
 
+def test_a_carried_thing_meeting_a_closed_drawer_is_a_contact_that_stops_the_arm() -> None:
+    """The hand carries a can towards a chest's closed bottom drawer: the can meeting the drawer's
+    handle is reported as the carried thing's contact and stops the arm, where before the world
+    pushed the drawer on through its end stop (a box lifted in a chest's lower drawer pushed the
+    one above 55 cm into the chest, recursive 1039 of tuning-wide)."""
+    scene = tabletop_variant("drawer-only", 6)
+    placement = next(pl for _, pl in scene.storage if pl.model.model == "drawer_chest")
+    drawer = min(placement.model.parts, key=lambda part: part.name)  # the bottom one
+    x = placement.pose[0]
+    can = next(obj for obj in scene.objects if obj.category == "can")
+    scene = _with_moved(scene, {can.instance_id: dataclasses.replace(can, center=(x, -0.22, can.center[2]))})
+    world = World(CameraConfig())
+    ik = _IK(world.start_tabletop(scene, (x, -(scene.table_size[1] / 2 + ROBOT_RADIUS + 0.03), math.pi / 2)))
+    try:
+        piece = world.stage.built.storage[placement.furniture_id]
+        handle = np.array(p.getLinkState(piece.body, piece.links[f"{drawer.name}_handle"], physicsClientId=world.client)[4])
+        top = np.array(world.object_position(can.instance_id)) + [0.0, 0.0, can.dims[1] / 2]
+        _go(world, READY)
+        q = _line(world, ik, ik.solve(READY, top + [0, 0, 0.2], DOWN), [top + [0, 0, 0.2 - 0.04 * k] for k in range(1, 6)], DOWN)
+        assert world.gripper(close=True)["id"] == can.instance_id
+        level = [handle[0], top[1], handle[2] + can.dims[1] / 2]  # the can's middle level with the handle
+        q = _line(world, ik, q, [top + (level - top) * k / 4 + [0, 0, 0.03] for k in range(1, 5)], DOWN)
+        path = [ik.solve(q, np.add(level, [0.0, 0.01 * k, 0.0]), DOWN) for k in range(1, int((handle[1] - top[1]) / 0.01) + 3)]
+        samples = np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip([world.arm.positions(), *path], path)])
+        result = world.follow_trajectory(samples, 0.02, stop_on_contact=True)
+        assert result.run.stopped_on_contact and result.run.samples_done < len(samples)
+        assert {c["robot_link"] for c in result.contacts} == {"held object"}
+        assert {c["category"] for c in result.contacts} <= {"drawer", "handle"}, result.contacts
+        assert world.part_states()[placement.furniture_id][drawer.name] >= drawer.lower - 0.005  # not pushed in
+    finally:
+        ik.close()
+        world.close()
+
+
 def test_an_open_bottomed_box_put_back_over_what_it_covered_stands_on_its_walls() -> None:
     """The shell is held by the closed fingertips on its lid, lifted off the smaller shell it
     covers and let go of where it stood: it stands on the table around that shell, not on its top."""

@@ -47,7 +47,8 @@ class TrajectoryResult:
 
     Args:
         run: the arm's own account (`worlds.arm.TrajectoryRun`).
-        contacts: labels of what was touched, each with ``robot_link`` (the arm's link), ``link``
+        contacts: labels of what was touched, each with ``robot_link`` (the arm's link, or
+            `worlds.arm.HELD_LINK` for what the hand carries), ``link``
             (a storage part's own, else None) and ``depth``.
     """
 
@@ -76,8 +77,9 @@ def follow_trajectory(stage: Stage, body: RobotBody, samples: np.ndarray, dt: fl
 
     ``samples`` must already lie within the joint limits (the command parser checks that); here
     the first sample must start where the arm is, within one sample's travel at full speed plus
-    `START_TOLERANCE`. Contacts of the arm with anything but floors, the held thing and the part
-    whose handle is held are reported, and with ``stop_on_contact`` end the motion early.
+    `START_TOLERANCE`. Contacts of the arm and of what it carries (`worlds.arm.Arm.touches`) with
+    anything but floors, the held thing and the part whose handle is held are reported, and with
+    ``stop_on_contact`` end the motion early.
 
     Args:
         stage: the built scene.

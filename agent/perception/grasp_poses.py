@@ -122,6 +122,27 @@ def top_grasp_point(points: np.ndarray, band_m: float = 0.01) -> np.ndarray:
     return pts[pts[:, 2] >= pts[:, 2].max() - band_m].mean(axis=0)
 
 
+#: The least a thing spans on any axis (m): two of the memory's voxels. A thing in a drawer is
+#: seen from above only, its sides behind the drawer's, and its points lie in one layer; it still
+#: stands some height, which a pick needs for how deep to grasp and how high to lift (recursive
+#: 1039 of tuning-wide). Guessed low, the lowering that puts it down stops on what it meets first.
+LEAST_EXTENT_M = 0.02
+
+
+def seen_extent(points: np.ndarray, least_m: float = LEAST_EXTENT_M) -> np.ndarray:
+    """The size of the box around an object's points, as a pick takes it.
+
+    Args:
+        points: (N, 3) points of the object, at least 1.
+        least_m: the least it spans along each axis.
+
+    Returns:
+        (dx, dy, dz), each at least ``least_m``.
+    """
+    pts = checked_points(points, "points", minimum=1)
+    return np.maximum(np.ptp(pts, axis=0), least_m)
+
+
 def _steps(geometry: PartGeometry, amount: float, n: int | None) -> int:
     if n is not None:
         if int(n) != n or n < 1:

@@ -214,9 +214,10 @@ class _Route:
             builder.move(way_in, named["above the object"], careful=True, stop_on_contact=True,
                          tcp_target=targets["above the object"])
         builder.grasp(self.way, self.down, named[self.down], self.grasp, "object")
-        for what in ("lift", "out", "carry", "in"):
+        for what in ("lift", "out", "carry", "in"):  # what it carries meeting a door or drawer stops it
             if what in named:
-                builder.move(what, named[what], careful=what != "carry", tcp_target=targets[what])
+                builder.move(what, named[what], careful=what != "carry", stop_on_contact=True,
+                             tcp_target=targets[what])
         builder.move("lower", named["lower"], careful=True, tcp_target=self.release, touch="support")
         builder.gripper("open", "put the object down")
         builder.move("back up", named["back up"], careful=True, tcp_target=targets["back up"])

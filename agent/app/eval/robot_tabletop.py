@@ -99,7 +99,8 @@ def object_positions(world: World, scene: TabletopScene) -> dict[str, np.ndarray
 
 
 def part_states(world: World, scene: TabletopScene) -> dict[str, float]:
-    """Part instance id -> 1.0 open, 0.0 closed (within `CLOSED_SHARE` of its range from closed).
+    """Part instance id -> 1.0 open, 0.0 closed (within `CLOSED_SHARE` of its range from closed),
+    -1.0 pushed in past its closed end by more than that share: not as it was, though not open.
 
     Args:
         world: the simulated world.
@@ -114,7 +115,8 @@ def part_states(world: World, scene: TabletopScene) -> dict[str, float]:
         ids = placement.part_ids()
         for part in placement.model.parts:
             value = joints[placement.furniture_id][part.name]
-            states[str(ids[part.name])] = float(value > part.lower + CLOSED_SHARE * (part.upper - part.lower))
+            share = CLOSED_SHARE * (part.upper - part.lower)
+            states[str(ids[part.name])] = 1.0 if value > part.lower + share else -1.0 if value < part.lower - share else 0.0
     return states
 
 
