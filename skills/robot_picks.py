@@ -23,6 +23,7 @@ from agent.acsg.from_memory import Box
 from agent.acsg.interfaces import SkillResult
 from agent.acsg.keep_clear import kept_clear
 from agent.perception.grasp_poses import LEAST_EXTENT_M, seen_extent, top_grasp_point
+from agent.perception.hidden_bodies import closed_drawer_faces
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
@@ -259,7 +260,20 @@ class Picks:
         put back over it, so it is not kept off: kept off, the box coming down over the clock
         ruled out every route checked clear, and the one taken unchecked swept the box across a
         chest's handles and pulled both its drawers open (recursive 1016 of tuning-wide)."""
-        return self.body.points_near({obj.id}, () if covering is None else (covering,), COVERED_M)
+        seen = self.body.points_near({obj.id}, () if covering is None else (covering,), COVERED_M)
+        return np.vstack([seen, *self._closed_drawers()])
+
+    def _closed_drawers(self) -> list[np.ndarray]:
+        """What the drawers not standing open fill behind their fronts (`closed_drawer_faces`),
+        for each drawer whose chest the memory holds."""
+        memory = self.body.memory
+        standing_open = {memory.get(part_id).id for part_id, opened in self.parts.opened.items() if opened.amount > 0}
+        faces = []
+        for drawer in memory.with_label("drawer"):
+            if drawer.id in standing_open or drawer.parent is None or len(front := drawer.points()) < 3:
+                continue
+            faces.append(closed_drawer_faces(front, memory.get(drawer.parent).points(), self.body.eye))
+        return faces
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

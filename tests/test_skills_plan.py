@@ -343,6 +343,20 @@ def test_a_pick_under_a_board_with_no_clear_route_is_refused_rather_than_run_unc
     _check_runnable(plan, np.array(STOWED))
 
 
+def test_a_wide_box_half_under_a_board_is_lifted_by_its_near_edge_only_on_a_checked_route(planner: ArmPlanner) -> None:
+    # A box too wide for the fingers, held by its near edge, in a drawer pulled out from under a
+    # closed one: the board stands over its far half, 10 cm from the hand but over its middle. A
+    # route taken unchecked lifted it 15 cm, into the drawer above (recursive 1039 of tuning-wide);
+    # it is lifted only as high as clears its own height, checked clear of the board.
+    top, place = np.array([0.3, -0.15, 0.87]), np.array([0.55, -0.25, 0.87])
+    xs, ys = np.meshgrid(np.linspace(0.15, 0.45, 16), np.linspace(-0.12, 0.1, 12))
+    board = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, top[2] + 0.17)])
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.2, 0.2, 0.1), place, surface_z=SURFACE, keep_off=board)
+    assert plan.info["grasp"] == "fingertips-on-near-edge"
+    assert plan.info["clear"] and plan.info["lift_m"] < 0.15
+    _check_runnable(plan, np.array(STOWED))
+
+
 def test_the_wrist_camera_is_put_at_a_standoff_looking_at_the_point(planner: ArmPlanner) -> None:
     point = np.array([0.3, -0.05, 0.85])
     plan = planner.plan_look(np.array(STOWED), BASE, point)

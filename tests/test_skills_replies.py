@@ -53,3 +53,16 @@ def test_a_move_held_back_within_a_voxel_of_its_target_has_arrived(short_m: floa
     found, _ = step_problem(step, reply, _reply())
     assert (found == "") == arrived and (arrived or "a touch too light" in found)
     assert ARRIVED_M == pytest.approx(0.015)
+
+
+@pytest.mark.parametrize("touched, problem", [
+    ({"category": "box", "id": 5, "link": None, "robot_link": "panda_rightfinger"}, ""),
+    # the fingertips came down on the cabinet's board, not the box on it: no arrival
+    ({"category": "cabinet", "id": 2, "link": None, "robot_link": "panda_rightfinger"},
+     "stopped on contact with cabinet 2 (panda_rightfinger)"),
+    ({"category": "drawer", "id": 4, "link": 1, "robot_link": "panda_leftfinger"}, "stopped on contact with drawer 4"),
+])
+def test_fingertips_brought_down_onto_an_object_arrive_only_on_an_object(touched: dict, problem: str) -> None:
+    step = Step("move", "down onto the object", samples=np.zeros((3, 8)), dt=0.01, stop_on_contact=True, touch="object")
+    found, _ = step_problem(step, _reply(final_error=2 * BLOCKED_RAD, stopped=True, contacts=(touched,)), _reply())
+    assert (found == "") if problem == "" else (problem in found)

@@ -167,9 +167,12 @@ def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, lift_m:
     for way in grasps:
         grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
-        ways.append((_touched(grasp, release, lift_m, keep_off),
-                     _Way(way, grasp, release, _confined(shifted(grasp, lift_m * UP), keep_off),
-                          _confined(shifted(release, lift_m * UP), keep_off))))
+        # over the object's middle as well as over the hand: a box held by its near edge in a
+        # drawer pulled out from under a closed one stands half under that drawer, which a route
+        # taken unchecked lifted it into (recursive 1039 of tuning-wide)
+        here, there = (any(_confined(shifted(pose, lift_m * UP), keep_off) for pose in poses)
+                       for poses in ((grasp, pose_at(way.rotation, top)), (release, pose_at(way.rotation, place))))
+        ways.append((_touched(grasp, release, lift_m, keep_off), _Way(way, grasp, release, here, there)))
     return [entry for _, entry in sorted(ways, key=lambda pair: pair[0])]
 
 

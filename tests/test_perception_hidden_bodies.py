@@ -1,0 +1,39 @@
+"""What a closed drawer fills behind its front (`agent.perception.hidden_bodies`), from plain points."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agent.perception.hidden_bodies import FACE_SPACING_M, closed_drawer_faces
+
+
+def _grid(x: tuple[float, float], y: tuple[float, float], z: tuple[float, float], step: float = 0.01) -> np.ndarray:
+    axes = [np.arange(lo, hi + 1e-9, step) if hi > lo else np.array([lo]) for lo, hi in (x, y, z)]
+    return np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 3)
+
+
+def test_a_closed_drawer_fills_the_chest_behind_its_front_from_its_bottom_to_its_top() -> None:
+    # a chest facing -y whose front stands at y = 0.09, its back at y = 0.38; the upper drawer's
+    # front spans x -0.18..0.18 and z 0.91..1.07; the camera looks from before it
+    front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
+    carcass = np.vstack([_grid((-0.18, -0.18), (0.09, 0.38), (0.75, 1.07)), _grid((0.18, 0.18), (0.09, 0.38), (0.75, 1.07))])
+    faces = closed_drawer_faces(front, carcass, eye=np.array([0.0, -0.7, 1.4]))
+    assert set(np.round(faces[:, 2], 3)) == {0.91, 1.07}
+    assert faces[:, 0].min() == pytest.approx(-0.18) and faces[:, 0].max() == pytest.approx(0.18, abs=FACE_SPACING_M)
+    assert faces[:, 1].min() == pytest.approx(0.09 + FACE_SPACING_M) and faces[:, 1].max() == pytest.approx(0.38, abs=FACE_SPACING_M)
+
+
+def test_a_front_with_nothing_seen_behind_it_fills_nothing() -> None:
+    front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
+    assert closed_drawer_faces(front, np.zeros((0, 3)), eye=np.array([0.0, -0.7, 1.4])).shape == (0, 3)
+    assert closed_drawer_faces(front, front, eye=np.array([0.0, -0.7, 1.4])).shape == (0, 3)
+
+
+def test_a_front_facing_another_way_fills_behind_it_that_way() -> None:
+    # the same chest turned to face +x: its front at x = 0.5, its back at x = 0.2
+    front = _grid((0.5, 0.5), (-0.18, 0.18), (0.91, 1.07))
+    carcass = _grid((0.2, 0.5), (-0.18, -0.18), (0.75, 1.07))
+    faces = closed_drawer_faces(front, carcass, eye=np.array([1.2, 0.0, 1.4]))
+    assert faces[:, 0].max() == pytest.approx(0.5 - FACE_SPACING_M) and faces[:, 0].min() == pytest.approx(0.2, abs=FACE_SPACING_M)
+    assert faces[:, 1].min() == pytest.approx(-0.18, abs=FACE_SPACING_M)
