@@ -357,6 +357,27 @@ def test_a_wide_box_half_under_a_board_is_lifted_by_its_near_edge_only_on_a_chec
     _check_runnable(plan, np.array(STOWED))
 
 
+def test_a_box_in_a_drawer_is_lifted_over_the_drawer_s_front_before_it_is_carried(planner: ArmPlanner) -> None:
+    # A box 14 cm tall in a drawer whose front stands 6 cm over the box's top, 2 cm before it: lifted
+    # the usual 15 cm it was drawn out through the front (recursive 1050 of tuning-wide).
+    top, place = np.array([0.3, -0.15, 0.87]), np.array([0.55, -0.25, 0.87])
+    size = np.array([0.06, 0.06, 0.14])
+    xs, zs = np.meshgrid(np.linspace(0.15, 0.45, 16), np.linspace(top[2] - 0.16, top[2] + 0.06, 12))
+    front = np.column_stack([xs.ravel(), np.full(xs.size, -0.2), zs.ravel()])
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE, keep_off=front)
+    rim = front[:, 2].max()
+    assert plan.info["lift_m"] >= rim - (top[2] - size[2]) + 0.01
+    _check_runnable(plan, np.array(STOWED))
+    lifted = _tcp(planner, {step.name: step for step in plan.steps}["lift"].samples[-1])[2, 3]
+    assert lifted + plan.info["grasp_depth_m"] - size[2] > rim  # its bottom over the front
+    open_air = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE)
+    assert open_air.info["lift_m"] == pytest.approx(0.15)
+    # put back into the drawer, it is carried over the front as well
+    back = planner.plan_pick(np.array(STOWED), BASE, place, size, top, skill="pick_back", surface_z=SURFACE,
+                             keep_off=front)
+    assert back.info["lift_m"] == pytest.approx(plan.info["lift_m"], abs=0.005)
+
+
 def test_the_wrist_camera_is_put_at_a_standoff_looking_at_the_point(planner: ArmPlanner) -> None:
     point = np.array([0.3, -0.05, 0.85])
     plan = planner.plan_look(np.array(STOWED), BASE, point)

@@ -51,6 +51,9 @@ CLEAR_GRASPS, CLEAR_ROUTES = 4, 48
 DETOUR_M = 0.25
 #: How far over the pose above an object (m) a board makes the pick a confined one (`_confined`).
 CONFINED_M = 0.3
+#: What stands within this much (m) around an object's box, up to `RIM_ABOVE_M` over its top, is a
+#: rim the object is lifted over before it is carried (`_over_the_rim`): the drawer it stands in.
+RIM_M, RIM_ABOVE_M = 0.03, 0.08
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -92,6 +95,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
+    lift_m = max(lift_m, *(_over_the_rim(point, size, keep_off) for point in (top, *places)))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
     near = np.zeros((0, 3)) if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
@@ -287,6 +291,22 @@ def _plain_routes(ways: list[_Way], lift_m: float, keep_off: np.ndarray | None) 
         for approach in _approaches(above, keep_off, none, before=False):
             routes.append(_Route(entry.grasp_way, entry.grasp, entry.release, lift_m, tuple(approach), none, none))
     return routes
+
+
+def _over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None) -> float:
+    """How high (m) the object, its top at ``top``, must be lifted for its bottom to clear, by
+    `LIFT_SPARE_M`, what stands around it (`RIM_M`, `RIM_ABOVE_M`): a box 14 cm tall in a
+    drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm over its top,
+    and carried back into it the same way (recursive 1050 of tuning-wide). 0 where nothing
+    stands around it."""
+    if keep_off is None or not len(keep_off):
+        return 0.0
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    bottom = float(top[2] - size[2])
+    lo, hi = top[:2] - size[:2] / 2 - RIM_M, top[:2] + size[:2] / 2 + RIM_M
+    around = (np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
+              & (points[:, 2] > bottom + LIFT_SPARE_M) & (points[:, 2] < top[2] + RIM_ABOVE_M))
+    return float(points[around, 2].max() - bottom + LIFT_SPARE_M) if around.any() else 0.0
 
 
 def _lifts(lift_m: float, size: np.ndarray) -> list[float]:
