@@ -357,6 +357,21 @@ def test_a_wide_box_half_under_a_board_is_lifted_by_its_near_edge_only_on_a_chec
     _check_runnable(plan, np.array(STOWED))
 
 
+def test_a_board_lower_over_a_box_than_its_lift_still_keeps_unchecked_routes_out(planner: ArmPlanner) -> None:
+    # A cabinet's board 12 cm over a wide box's top, lower than the usual 15 cm lift: it did not
+    # count as a board over the pick, a route was taken unchecked, and a finger went up into the
+    # board (recursive 1043 of tuning-wide).
+    top, place = np.array([0.3, -0.15, 0.87]), np.array([0.55, -0.25, 0.87])
+    xs, ys = np.meshgrid(np.linspace(0.1, 0.5, 21), np.linspace(-0.3, 0.1, 21))
+    board = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, top[2] + 0.12)])
+    try:
+        plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.2, 0.2, 0.1), place, surface_z=SURFACE, keep_off=board)
+    except SkillPlanError as error:
+        assert "none is taken unchecked under a board" in str(error)
+    else:
+        assert plan.info["clear"]
+
+
 def test_a_box_in_a_drawer_is_lifted_over_the_drawer_s_front_before_it_is_carried(planner: ArmPlanner) -> None:
     # A box 14 cm tall in a drawer whose front stands 6 cm over the box's top, 2 cm before it: lifted
     # the usual 15 cm it was drawn out through the front (recursive 1050 of tuning-wide).

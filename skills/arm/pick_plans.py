@@ -110,7 +110,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first); else, as without such checks, to the first place, the first
     # grasp that reaches at all, unless it is confined (`_plain_routes`).
-    ways_to = [_ways(grasps, top, place, lift_m, clearance_m, keep_off) for place in places]
+    ways_to = [_ways(grasps, top, place, size, lift_m, clearance_m, keep_off) for place in places]
     routes = [(route, True) for place, ways in zip(places, ways_to, strict=True)
               for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
     routes += [(route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off)]
@@ -163,19 +163,17 @@ class _Way:
     confined_there: bool
 
 
-def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, lift_m: float, clearance_m: float,
-          keep_off: np.ndarray | None) -> list[_Way]:
+def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: np.ndarray, lift_m: float,
+          clearance_m: float, keep_off: np.ndarray | None) -> list[_Way]:
     """Each grasp's way to ``place``, those whose hand touches fewer of ``keep_off`` coming straight
     down onto the object and onto the place first (stable: else best first)."""
     ways = []
+    boarded = [_under_a_board(point, size, lift_m, keep_off) for point in (top, place)]
     for way in grasps:
         grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
-        # over the object's middle as well as over the hand: a box held by its near edge in a
-        # drawer pulled out from under a closed one stands half under that drawer, which a route
-        # taken unchecked lifted it into (recursive 1039 of tuning-wide)
-        here, there = (any(_confined(shifted(pose, lift_m * UP), keep_off) for pose in poses)
-                       for poses in ((grasp, pose_at(way.rotation, top)), (release, pose_at(way.rotation, place))))
+        here, there = (board or _confined(shifted(pose, lift_m * UP), keep_off)
+                       for board, pose in zip(boarded, (grasp, release), strict=True))
         ways.append((_touched(grasp, release, lift_m, keep_off), _Way(way, grasp, release, here, there)))
     return [entry for _, entry in sorted(ways, key=lambda pair: pair[0])]
 
@@ -331,6 +329,22 @@ def _approaches(above: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarr
         approaches.append([("before the object", "free", shifted(above, BEFORE_M[1] * toward)),
                            ("above the object", "line", above)])
     return approaches
+
+
+def _under_a_board(top: np.ndarray, size: np.ndarray, lift_m: float, keep_off: np.ndarray | None) -> bool:
+    """Whether something stands over the object's own top, its top at ``top``, below where it is
+    lifted to and `CONFINED_M` over that: over its middle, not only over the hand (`_confined`).
+    A box held by its near edge in a drawer pulled out from under a closed one stood half under
+    that drawer, 10 cm from the hand, and a route taken unchecked lifted it into it (recursive 1039
+    of tuning-wide); a cabinet's board 12 cm over a box's top, lower than the lift, did not count
+    as over it, and a finger went up into the board (recursive 1043)."""
+    if keep_off is None or not len(keep_off):
+        return False
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    lo, hi = top[:2] - size[:2] / 2, top[:2] + size[:2] / 2
+    over = (np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
+            & (points[:, 2] > top[2] + LIFT_SPARE_M) & (points[:, 2] < top[2] + lift_m + CONFINED_M))
+    return int(np.count_nonzero(over)) >= 3
 
 
 def _confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
