@@ -18,6 +18,7 @@ from agent.perception.part_geometry import PartGeometry
 from agent.perception.part_motion import DEFAULT_AMOUNT
 from agent.pose import Pose2D
 from skills.base import ArmSkill, SkillResult
+from skills.arm.grasps import ObjectGrasp
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError
 from skills.ports import input_port
@@ -138,12 +139,15 @@ class _Pick(ArmSkill):
                    "destination (x, y, z); or (k, 3) such places, the first a clear way reaches taken"),
         input_port("keep_off", np.ndarray, "points (N, 3) of what stands near, neither the object nor what it "
                    "stands on, which the hand is to keep off", default=None),
+        input_port("grasp_first", ObjectGrasp, "a grasp to try before all others: the one the object was "
+                   "taken away by, to put it back the way it came", default=None),
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_pick(q, base_pose, inputs["object_point"], inputs["object_extent"], inputs["place_point"],
-                                 surface_z=inputs["surface_z"], skill=self.skill_name, keep_off=inputs["keep_off"])
+                                 surface_z=inputs["surface_z"], skill=self.skill_name, keep_off=inputs["keep_off"],
+                                 grasp_first=inputs["grasp_first"])
 
     def summary(self, result: SkillResult) -> str:
         place = result.info.get("place_point")

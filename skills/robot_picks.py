@@ -26,6 +26,7 @@ from agent.perception.grasp_poses import LEAST_EXTENT_M, seen_extent, top_grasp_
 from agent.perception.hidden_bodies import closed_drawer_faces
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
+from skills.arm.grasps import ObjectGrasp
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
@@ -51,13 +52,15 @@ PLACE_REACH_M = 0.8
 @dataclass(frozen=True)
 class Away:
     """A thing this robot picked away: its top grasp point where it stood (``grasp_point``), where
-    that point was put down (``placed_point``), its ``extent``, and the base's x along the table's
-    edge when it was picked (``stand_x``)."""
+    that point was put down (``placed_point``), its ``extent``, the base's x along the table's
+    edge when it was picked (``stand_x``), and how the hand held it (``grasp``, None where the
+    plan did not say)."""
 
     grasp_point: np.ndarray
     placed_point: np.ndarray
     extent: np.ndarray
     stand_x: float
+    grasp: ObjectGrasp | None = None
 
 
 class Picks:
@@ -142,7 +145,7 @@ class Picks:
             return SkillResult(False, result.reason)
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
         body.memory.move(obj.id, _translation(place - top))
-        self.away[obj.id] = Away(top, place, extent, stand_x)
+        self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
         self.vacated[obj.id] = box
         return SkillResult(True)
 
@@ -217,7 +220,7 @@ class Picks:
             now = np.array([*away.placed_point[:2], now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
-                          label=f"{obj.label} {obj.id}",
+                          label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
                           keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:
             body.memory.move(obj.id, _translation(away.grasp_point - now))

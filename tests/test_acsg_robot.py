@@ -243,3 +243,22 @@ def test_an_arm_folded_on_its_way_elsewhere_does_not_leave_a_door_open() -> None
     # out of the stowed pose to that door's handle by no way clear of the door, pushed it on, and
     # the door was left open. The arm is folded on the way only when coming back to close a part.
     _explored_and_put_back("drawer-door", 1094)
+
+
+def test_a_box_taken_out_of_a_cabinet_by_its_near_edge_goes_back_the_way_it_came() -> None:
+    # recursive 1025 (tuning-wide): grasped again by the edge nearest the robot where it stood on
+    # the table, the box came into the cabinet turned and no route put it back; held as it was taken
+    # out, its top, 1.4 cm lower than the memory had it, was not found by a touch along the leaning
+    # hand's axis. It goes back held as it came out, its top sought straight down.
+    row = run_robot("recursive", 1025)
+    assert not any(failed.startswith("pick_back") for failed in row["failed_actions"]), row["failed_actions"]
+    assert row["state_recovered"]
+
+
+def test_a_box_in_a_lower_drawer_is_not_lifted_into_the_closed_drawer_above() -> None:
+    # recursive 1039 (tuning-wide): a box held by its near edge in the chest's lower drawer, half
+    # under the closed drawer above, was lifted 15 cm on a route taken unchecked and pushed that
+    # drawer 55 cm into the chest; what the closed drawer fills behind its front is kept off, and
+    # the box is left where it stands rather than lifted into it.
+    row = run_robot("recursive", 1039)
+    assert row["state_recovered"], row["failed_actions"]

@@ -15,8 +15,8 @@ from skills.arm.arm_model import READY
 from skills.arm.clearance import CLEARANCE_M, Clearance, box_points
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import APPROACH_M
-from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, front_clearance,
-                               hand_bottom, hand_touches)
+from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, TOUCH_SEARCH_M, ObjectGrasp,
+                               front_clearance, hand_bottom, hand_touches, top_rotation)
 from skills.arm.link_shells import LINK_RADIUS_M
 from skills.arm.part_plans import PUSH_PAST
 from skills.arm.pick_plans import HIGH_ABOVE_M
@@ -277,6 +277,27 @@ def test_a_wide_box_whose_middle_is_out_of_reach_is_lifted_by_its_near_edge(plan
     assert _close_pose(_tcp(planner, steps["lift"].waypoints[1]), plan.info["grasp_pose"])
     release = _tcp(planner, steps["lower"].samples[-1])  # carried by its edge: the edge goes as far
     assert release[:3, 3] == pytest.approx(place + edge + [0, 0, 0.015 + FINGERTIP_M], abs=0.002)
+
+
+def test_a_box_goes_back_held_as_it_was_taken_away_and_its_top_is_sought_straight_down(planner: ArmPlanner) -> None:
+    # Taken out of a cabinet by its near edge, the hand leaning back 65°, a box is put back held so
+    # again (``grasp_first``): grasped by the edge nearest the robot where it stood on the table, it
+    # came into the cabinet turned and no route put it back (recursive 1025 of tuning-wide). The
+    # touch that finds its top goes on straight down: along the leaning hand's axis it went 0.8 cm
+    # lower, short of a top put down 1.4 cm lower than the memory had it.
+    top, place, size = np.array([0.45, -0.2, 0.87]), np.array([0.3, -0.1, 0.87]), np.array([0.18, 0.15, 0.08])
+    lean = math.radians(65.0)
+    held = ObjectGrasp(top_rotation(np.array([-1.0, 0.0, 0.0]), lean, np.array([0.0, 1.0, 0.0])), -FINGERTIP_M,
+                       "fingertips-on-near-edge", touch=True, offset=np.array([0.0, -0.045, 0.0]))
+    plan = planner.plan_pick(np.array(STOWED), BASE, top, size, place, skill="pick_back", surface_z=SURFACE,
+                             grasp_first=held)
+    assert plan.info["grasp_way"] is held
+    _check_runnable(plan, np.array(STOWED))
+    grasp = plan.info["grasp_pose"]
+    assert np.allclose(grasp[:3, :3], held.rotation) and grasp[2, 2] > -0.5  # leaning back
+    down = _tcp(planner, {step.name: step for step in plan.steps}["down onto the object's top"].samples[-1])
+    assert down[:3, 3] == pytest.approx(grasp[:3, 3] - [0, 0, TOUCH_SEARCH_M], abs=0.002)
+    assert planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE).info["grasp_way"] != held
 
 
 def test_a_pick_keeps_the_hand_off_what_stands_beside_the_object(planner: ArmPlanner) -> None:

@@ -24,7 +24,7 @@ from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import searched
 from skills.arm.grasps import UP, ObjectGrasp, hand_touches, object_grasps
-from skills.arm.ik_search import IKSearch
+from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
 
@@ -59,7 +59,8 @@ RIM_M, RIM_ABOVE_M = 0.03, 0.08
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
               extent: Sequence[float], place_point: Sequence[float], *, skill: str = "pick_away",
               surface_z: float | None = None, lift_m: float = 0.15, clearance_m: float = 0.015,
-              grasp_depth_m: float | None = None, keep_off: np.ndarray | None = None) -> SkillPlan:
+              grasp_depth_m: float | None = None, keep_off: np.ndarray | None = None,
+              grasp_first: ObjectGrasp | None = None) -> SkillPlan:
     """Pick an object and put it down elsewhere (see the module doc).
 
     Args:
@@ -78,10 +79,14 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         keep_off: (N, 3) points of what stands near, neither the object nor what it stands on:
             the grasps whose hand would touch fewer of them, coming down onto the object and onto
             the place, are tried first.
+        grasp_first: a grasp to seek a clear chain by before all others (``info["grasp_way"]`` of
+            the pick that took the object away): a box taken out of a cabinet by its near edge,
+            grasped again by the edge nearest the robot where it stood on the table, came into the
+            cabinet turned, and no route put it back (recursive 1025 of tuning-wide).
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
-        rest on its top, ``info["place_point"]`` where it goes.
+        rest on its top (``info["grasp_way"]``: the grasp itself), ``info["place_point"]`` where it goes.
 
     Raises:
         SkillPlanError: a bad argument, or no grasp reaches along the whole chain.
@@ -107,13 +112,20 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     failures: list[str] = []
     toward = _toward(base_pose, top)
     grasps = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth)
+
+    def clear_routes(choices: list[ObjectGrasp], chosen: bool) -> tuple[list[list[_Way]], list[tuple[_Route, bool]]]:
+        ways_to = [_ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
+        return ways_to, [(route, True) for place, ways in zip(places, ways_to, strict=True)
+                         for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place),
+                                                    chosen)]
+
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
-    # each, the likeliest first); else, as without such checks, to the first place, the first
-    # grasp that reaches at all, unless it is confined (`_plain_routes`).
-    ways_to = [_ways(grasps, top, place, size, lift_m, clearance_m, keep_off) for place in places]
-    routes = [(route, True) for place, ways in zip(places, ways_to, strict=True)
-              for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
-    routes += [(route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off)]
+    # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
+    # checks, to the first place, the first grasp that reaches at all, unless it is confined
+    # (`_plain_routes`).
+    first = [] if grasp_first is None else clear_routes([grasp_first], True)[1]
+    ways_to, routes = clear_routes(grasps, False)
+    routes = [*first, *routes, *((route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off))]
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release
         carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
@@ -125,24 +137,55 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
 
         stages = route.stages()
         try:
-            chains = ik.clear_chain(stages, check) if clear else ik.chain(stages)
+            if not clear:
+                chains = ik.chain(stages)
+            elif np.any(route.inward):  # into storage: from inside it first, then as it came
+                chains = _retraced(ik, stages, check) or ik.clear_chain(stages, check)
+            else:
+                chains = ik.clear_chain(stages, check)
             if chains is None:
                 continue
             named = dict(zip((stage[0] for stage in stages), chains))
             down = route.down
-            named[down] = searched(ik, named[down], grasp, down) if way.touch else named[down]
+            named[down] = searched(ik, named[down], grasp, down, straight_down=True) if way.touch else named[down]
         except SkillPlanError as error:
             failures.append(str(error))
             continue
         route.build(builder, named)
         place = release[:3, 3] - way.offset - (clearance_m - way.depth) * UP
         info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
-                "grasp_depth_m": way.depth, "grasp": way.name, "lift_m": route.lift, "clear": clear}
+                "grasp_depth_m": way.depth, "grasp": way.name, "grasp_way": way, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
     if not failures:
         raise SkillPlanError("pick: no route clear of what stands near, and none is taken unchecked under a board "
                              "close over the object or its place")
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCheck) -> list[np.ndarray] | None:
+    """The waypoints of a chain clear all the way (`IKSearch.clear_chain`) worked out from where
+    it lets go back to where it begins, then turned round: the arm postures inside the storage
+    the object goes into are those a pick out of it found, and the way out of there is the way in.
+    Worked out forwards, from the object on the table, the carry into a cabinet came with postures
+    whose links touched the cabinet on every route, and a box taken out of it by a checked route
+    could not be put back (recursive 1025 of tuning-wide).
+
+    Args:
+        stages: the route's stages (`_Route.stages`): a free one, lines, and the back-up last.
+        check: as for `IKSearch.clear_chain`.
+
+    Returns:
+        Each stage's waypoints in the order of ``stages``, or None where no posture passes.
+    """
+    *forward, _ = stages  # the back-up retraces the lowering
+    last = len(forward) - 1
+    backwards = [(forward[last][0], "free", forward[last][2])]
+    backwards += [(forward[k][0], "line", forward[k - 1][2]) for k in range(last, 0, -1)]
+    found = ik.clear_chain(backwards, check)
+    if found is None:
+        return None
+    chains = [found[-1][-1][None, :], *(found[last - k + 1][::-1] for k in range(1, last + 1))]
+    return [*chains, chains[-1][::-1]]
 
 
 def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
@@ -230,7 +273,7 @@ class _Route:
 
 
 def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
-                  toward: np.ndarray, to_place: np.ndarray) -> list[_Route]:
+                  toward: np.ndarray, to_place: np.ndarray, chosen: bool = False) -> list[_Route]:
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
     In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
@@ -241,7 +284,8 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     leaning back towards the robot, the steepest first; the object is lifted only as high as
     clears what it covers first (`_lifts`); the hand comes in directly or from before the pose
     above it; and the object is drawn straight out of the storage before the carry, or brought
-    straight into it after, by each of `BEFORE_M`."""
+    straight into it after, by each of `BEFORE_M`. A ``chosen`` grasp (`plan_pick`'s
+    ``grasp_first``) is taken in the open too, whatever it is."""
     routes = []
     open_ways = [entry for entry in ways if entry.grasp_way.name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
     edge_ways = sorted((entry for entry in ways if entry.grasp_way.name == "fingertips-on-near-edge"),
@@ -249,7 +293,7 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     for entry in [*edge_ways, *open_ways]:
         way, grasp, release = entry.grasp_way, entry.grasp, entry.release
         here, there = entry.confined_here, entry.confined_there
-        if way.name == "fingertips-on-near-edge" and not (here or there):
+        if way.name == "fingertips-on-near-edge" and not (here or there or chosen):
             continue
         for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
             approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
