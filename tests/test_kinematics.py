@@ -16,6 +16,7 @@ import pybullet_data
 import pytest
 
 from agent.app.bench.arm import bench_arm
+from skills.arm.ik_solver import plan_cartesian_path, solve_ik
 from skills.arm.kinematics import ArmKinematics
 from skills.arm.tcp_paths import arc_poses, line_poses
 from skills.arm.trajectory import JointLimits, plan_trajectory
@@ -119,7 +120,7 @@ def test_jacobian_matches_finite_differences(kin: ArmKinematics) -> None:
 def test_ik_reaches_reachable_poses(kin: ArmKinematics) -> None:
     rng = np.random.default_rng(3)
     targets = [kin.forward(q) for q in random_configurations(kin, 50, seed=4)]
-    results = [kin.solve_ik(target, kin.home(), rng) for target in targets]
+    results = [solve_ik(kin, target, kin.home(), rng) for target in targets]
     assert sum(r.success for r in results) / len(results) >= 0.95
     for target, result in zip(targets, results, strict=True):
         assert kin.within_limits(result.q)
@@ -134,8 +135,8 @@ def test_ik_reaches_reachable_poses(kin: ArmKinematics) -> None:
 def test_ik_is_reproducible_with_the_same_seed(kin: ArmKinematics) -> None:
     target = kin.forward(random_configurations(kin, 1, seed=5)[0])
     start = kin.upper - 1e-3  # far from the target, to make restarts likely
-    first = kin.solve_ik(target, start, np.random.default_rng(7))
-    second = kin.solve_ik(target, start, np.random.default_rng(7))
+    first = solve_ik(kin, target, start, np.random.default_rng(7))
+    second = solve_ik(kin, target, start, np.random.default_rng(7))
     assert first.success and first.restarts >= 1  # the seeded generator was used
     np.testing.assert_array_equal(first.q, second.q)
     assert first.restarts == second.restarts
@@ -148,7 +149,7 @@ def test_ik_position_only_and_free_tool_axis(kin: ArmKinematics) -> None:
     for q in random_configurations(kin, 10, seed=8):
         target = kin.forward(q) @ spin  # same position and tool axis, turned 1 rad about that axis
         for mode in ("position", "axis"):
-            result = kin.solve_ik(target, kin.home(), rng, mode=mode)
+            result = solve_ik(kin, target, kin.home(), rng, mode=mode)
             assert result.success, result.reason
             reached = kin.forward(result.q)
             assert np.linalg.norm(reached[:3, 3] - target[:3, 3]) < 1e-3
@@ -159,7 +160,7 @@ def test_ik_position_only_and_free_tool_axis(kin: ArmKinematics) -> None:
 def test_ik_reports_a_target_beyond_reach(kin: ArmKinematics) -> None:
     target = np.eye(4)
     target[:3, 3] = [3.0, 0.0, 0.8]
-    result = kin.solve_ik(target, kin.home(), np.random.default_rng(0))
+    result = solve_ik(kin, target, kin.home(), np.random.default_rng(0))
     assert not result.success
     assert "from the shoulder, beyond the arm's 1.09 m reach" in result.reason
     assert result.reason.startswith("target 2.8")
@@ -170,7 +171,7 @@ def test_ik_reports_a_target_beyond_reach(kin: ArmKinematics) -> None:
 def test_ik_reports_a_pose_it_cannot_reach(kin: ArmKinematics) -> None:
     target = np.eye(4)  # within arm's length of the shoulder, but the gripper would point up
     target[:3, 3] = [1.0, 0.0, 0.75]
-    result = kin.solve_ik(target, kin.home(), np.random.default_rng(0), max_restarts=3)
+    result = solve_ik(kin, target, kin.home(), np.random.default_rng(0), max_restarts=3)
     assert not result.success
     assert result.reason.startswith("did not converge: best error ")
     assert result.reason.endswith("°") and " cm / " in result.reason
@@ -186,13 +187,13 @@ def test_bad_inputs_are_named(urdf: str, kin: ArmKinematics) -> None:
     with pytest.raises(ValueError, match="repeat"):
         ArmKinematics(urdf, ["lift_joint", "lift_joint"], TCP)
     with pytest.raises(ValueError, match="target_pose: expected a 4×4"):
-        kin.solve_ik(np.eye(3), kin.home())
+        solve_ik(kin, np.eye(3), kin.home())
     with pytest.raises(ValueError, match="not a rotation"):
-        kin.solve_ik(np.diag([2.0, 1.0, 1.0, 1.0]), kin.home())
+        solve_ik(kin, np.diag([2.0, 1.0, 1.0, 1.0]), kin.home())
     with pytest.raises(ValueError, match=r"q_seed: expected shape \(8,\)"):
-        kin.solve_ik(np.eye(4), np.zeros(7))
+        solve_ik(kin, np.eye(4), np.zeros(7))
     with pytest.raises(ValueError, match="mode"):
-        kin.solve_ik(np.eye(4), kin.home(), mode="wrist")  # type: ignore[arg-type]
+        solve_ik(kin, np.eye(4), kin.home(), mode="wrist")  # type: ignore[arg-type]
 
 
 def test_fixed_joints_hold_their_values(urdf: str) -> None:
@@ -214,7 +215,7 @@ def test_cartesian_line_stays_on_the_line(kin: ArmKinematics) -> None:
     end[:3, 3] += [-0.3, 0.05, 0.0]  # pull a drawer 30 cm towards the robot
     poses = line_poses(start, end, max_step=0.01)
     assert len(poses) == 31  # 30.4 cm in steps of at most 1 cm
-    path = kin.plan_cartesian_path(DRAWER_START, poses)
+    path = plan_cartesian_path(kin, DRAWER_START, poses)
     assert path.success, path.reason
     assert path.q.shape == (32, kin.dof) and path.max_position_error < 0.002
     assert all(kin.within_limits(q) for q in path.q)
@@ -238,7 +239,7 @@ def test_cartesian_line_stays_on_the_line(kin: ArmKinematics) -> None:
 def test_cartesian_arc_follows_a_door(kin: ArmKinematics) -> None:
     start = kin.forward(DRAWER_START)
     hinge = start[:3, 3] + [0.0, 0.4, 0.0]  # door 40 cm wide, hinged on the left, opening towards the robot
-    path = kin.plan_cartesian_path(DRAWER_START, arc_poses(start, hinge, [0, 0, 1], math.radians(-40)))
+    path = plan_cartesian_path(kin, DRAWER_START, arc_poses(start, hinge, [0, 0, 1], math.radians(-40)))
     assert path.success, path.reason
     for q in path.q:
         position = kin.forward(q)[:3, 3]
@@ -250,19 +251,19 @@ def test_cartesian_path_fails_clearly(kin: ArmKinematics) -> None:
     start = kin.forward(DRAWER_START)
     far = start.copy()
     far[:3, 3] += [-0.3, 0.0, 0.0]
-    jump = kin.plan_cartesian_path(DRAWER_START, [far])
+    jump = plan_cartesian_path(kin, DRAWER_START, [far])
     assert not jump.success and jump.failed_index == 0
     assert "to jump" in jump.reason and "from the previous waypoint" in jump.reason
     assert jump.q.shape == (1, kin.dof)
     away = start.copy()
     away[:3, 3] = [3.0, 0.0, 0.8]
     poses = line_poses(start, far, max_step=0.02)[:3] + [away]
-    unreachable = kin.plan_cartesian_path(DRAWER_START, poses)
+    unreachable = plan_cartesian_path(kin, DRAWER_START, poses)
     assert not unreachable.success and unreachable.failed_index == 3
     assert unreachable.reason.startswith("pose 3 is unreachable: target ")
     assert unreachable.q.shape == (4, kin.dof)
     with pytest.raises(ValueError, match="start_q"):
-        kin.plan_cartesian_path(kin.upper + 1.0, [far])
+        plan_cartesian_path(kin, kin.upper + 1.0, [far])
 
 
 def test_bench_arm_reports_its_fields(urdf: str) -> None:

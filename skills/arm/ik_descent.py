@@ -1,5 +1,5 @@
 """One damped least-squares IK descent: the inner loop of
-`skills.arm.kinematics.ArmKinematics.solve_ik`.
+`skills.arm.ik_solver.solve_ik`.
 
 The error is world-aligned: the position error p* − p in metres and the rotation error
 log3(R* Rᵀ) in radians, so tolerances are plain distances and angles, and a position-only or

@@ -16,6 +16,7 @@ from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
 from skills.arm.frames import base_transform
 from skills.arm.ik_descent import IKMode
+from skills.arm.ik_solver import plan_cartesian_path, solve_ik
 from skills.arm.kinematics import ArmKinematics
 from skills.arm.skill_plan import SkillPlanError
 from skills.arm.tcp_paths import line_poses
@@ -123,7 +124,7 @@ class IKSearch:
         starts = [*self.seeds(seed, target), *(kin.random_configuration(self.rng) for _ in range(restarts))]
         for start in starts:
             began = time.perf_counter()
-            result = kin.solve_ik(target, kin.clip(start), self.rng, mode=mode, max_restarts=0)
+            result = solve_ik(kin, target, kin.clip(start), self.rng, mode=mode, max_restarts=0)
             self.seconds += time.perf_counter() - began
             self.solves += 1
             if not result.success:
@@ -152,8 +153,8 @@ class IKSearch:
         key = np.asarray(start_q, dtype=float).tobytes() + np.asarray(poses_world, dtype=float).tobytes()
         if key not in self._paths:
             began = time.perf_counter()
-            result = self.arm.kin.plan_cartesian_path(start_q, [self.to_base @ pose for pose in poses_world],
-                                                      max_joint_jump=0.35, max_deviation=0.004)
+            result = plan_cartesian_path(self.arm.kin, start_q, [self.to_base @ pose for pose in poses_world],
+                                         max_joint_jump=0.35, max_deviation=0.004)
             self.seconds += time.perf_counter() - began
             self.solves += len(poses_world)
             self._paths[key] = result.q if result.success else result.reason

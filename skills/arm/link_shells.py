@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from skills.arm.kinematics import ArmKinematics
+from skills.arm.segments import nearest_on_segments
 
 log = logging.getLogger(__name__)
 
@@ -93,28 +94,6 @@ def collision_vertices(urdf_xml: str, joint: str) -> np.ndarray | None:
         rpy = np.array(((origin.get("rpy") if origin is not None else None) or "0 0 0").split(), dtype=float)
         vertices.append((_obj_vertices(path) * scale) @ _rotation_rpy(*rpy).T + xyz)
     return np.vstack(vertices) if vertices else None
-
-
-def nearest_on_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    """The point of a set of segments nearest each of ``points``.
-
-    Args:
-        points: (N, 3) points.
-        segments: (m ≥ 1, 2, 3) the segments' ends.
-
-    Returns:
-        (N, 3) the nearest points of the segments.
-    """
-    best = np.full(len(points), np.inf)
-    nearest = np.zeros_like(points)
-    for start, end in segments:
-        along = end - start
-        share = np.clip((points - start) @ along / max(float(along @ along), 1e-12), 0.0, 1.0)
-        foot = start + share[:, None] * along
-        gap = np.linalg.norm(points - foot, axis=1)
-        closer = gap < best
-        best[closer], nearest[closer] = gap[closer], foot[closer]
-    return nearest
 
 
 def bulge_centres(vertices: np.ndarray, segments: np.ndarray, radius: float = LINK_RADIUS_M,

@@ -1,6 +1,6 @@
 """Dense TCP poses along the paths a held part takes: a straight line (a drawer pulled out, an
 approach along the gripper's axis) and an arc about a hinge (a door swinging). Fed to
-`skills.arm.kinematics.ArmKinematics.plan_cartesian_path`, which needs them close together.
+`skills.arm.ik_solver.plan_cartesian_path`, which needs them close together.
 """
 
 from __future__ import annotations

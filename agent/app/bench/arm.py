@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from skills.arm.ik_solver import solve_ik
 from skills.arm.kinematics import ArmKinematics
 from skills.arm.trajectory import JointLimits, plan_trajectory
 
@@ -54,7 +55,7 @@ def bench_arm(urdf_xml: str, joints: Sequence[str], tcp_frame: str, n: int = 100
     for _ in range(n):
         target = kin.forward(kin.random_configuration(targets_rng))
         began = time.perf_counter()
-        result = kin.solve_ik(target, start, solver_rng)
+        result = solve_ik(kin, target, start, solver_rng)
         ik_ms.append(1e3 * (time.perf_counter() - began))
         successes += result.success
         iterations += result.iterations
