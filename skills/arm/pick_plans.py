@@ -79,10 +79,13 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         keep_off: (N, 3) points of what stands near, neither the object nor what it stands on:
             the grasps whose hand would touch fewer of them, coming down onto the object and onto
             the place, are tried first.
-        grasp_first: a grasp to seek a clear chain by before all others (``info["grasp_way"]`` of
-            the pick that took the object away): a box taken out of a cabinet by its near edge,
-            grasped again by the edge nearest the robot where it stood on the table, came into the
-            cabinet turned, and no route put it back (recursive 1025 of tuning-wide).
+        grasp_first: a grasp to seek a clear chain into storage by before all others
+            (``info["grasp_way"]`` of the pick that took the object out): a box taken out of a
+            cabinet by its near edge, grasped again by the edge nearest the robot where it stood on
+            the table, came into the cabinet turned, and no route put it back (recursive 1025 of
+            tuning-wide). In the open it is not: the usual grasps close across the line of sight,
+            where the memory places things best, and a bottle held again as it had been taken
+            away, across the line of sight from where it stood, was missed (occlusion 1027).
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
@@ -113,18 +116,18 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     toward = _toward(base_pose, top)
     grasps = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth)
 
-    def clear_routes(choices: list[ObjectGrasp], chosen: bool) -> tuple[list[list[_Way]], list[tuple[_Route, bool]]]:
+    def clear_routes(choices: list[ObjectGrasp]) -> tuple[list[list[_Way]], list[tuple[_Route, bool]]]:
         ways_to = [_ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
         return ways_to, [(route, True) for place, ways in zip(places, ways_to, strict=True)
-                         for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place),
-                                                    chosen)]
+                         for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
 
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
-    # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
-    # checks, to the first place, the first grasp that reaches at all, unless it is confined
-    # (`_plain_routes`).
-    first = [] if grasp_first is None else clear_routes([grasp_first], True)[1]
-    ways_to, routes = clear_routes(grasps, False)
+    # each, the likeliest first), into storage by ``grasp_first`` before any other; else, as
+    # without such checks, to the first place, the first grasp that reaches at all, unless it is
+    # confined (`_plain_routes`).
+    first = [] if grasp_first is None else [(route, clear) for route, clear in clear_routes([grasp_first])[1]
+                                             if np.any(route.inward)]
+    ways_to, routes = clear_routes(grasps)
     routes = [*first, *routes, *((route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off))]
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release
@@ -273,7 +276,7 @@ class _Route:
 
 
 def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
-                  toward: np.ndarray, to_place: np.ndarray, chosen: bool = False) -> list[_Route]:
+                  toward: np.ndarray, to_place: np.ndarray) -> list[_Route]:
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
     In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
@@ -284,8 +287,7 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     leaning back towards the robot, the steepest first; the object is lifted only as high as
     clears what it covers first (`_lifts`); the hand comes in directly or from before the pose
     above it; and the object is drawn straight out of the storage before the carry, or brought
-    straight into it after, by each of `BEFORE_M`. A ``chosen`` grasp (`plan_pick`'s
-    ``grasp_first``) is taken in the open too, whatever it is."""
+    straight into it after, by each of `BEFORE_M`."""
     routes = []
     open_ways = [entry for entry in ways if entry.grasp_way.name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
     edge_ways = sorted((entry for entry in ways if entry.grasp_way.name == "fingertips-on-near-edge"),
@@ -293,7 +295,7 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     for entry in [*edge_ways, *open_ways]:
         way, grasp, release = entry.grasp_way, entry.grasp, entry.release
         here, there = entry.confined_here, entry.confined_there
-        if way.name == "fingertips-on-near-edge" and not (here or there or chosen):
+        if way.name == "fingertips-on-near-edge" and not (here or there):
             continue
         for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
             approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
