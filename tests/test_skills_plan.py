@@ -299,7 +299,7 @@ def test_a_box_goes_back_held_as_it_was_taken_away_and_its_top_is_sought_straigh
     assert np.allclose(grasp[:3, :3], held.rotation) and grasp[2, 2] > -0.5  # leaning back
     down = _tcp(planner, {step.name: step for step in plan.steps}["down onto the object's top"].samples[-1])
     assert down[:3, 3] == pytest.approx(grasp[:3, 3] - [0, 0, TOUCH_SEARCH_M], abs=0.002)
-    # in the open it goes back by the usual grasps, which close across the line of sight
+    # in the open, with room over it, a hand leaning back over its near edge is not taken
     open_air = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE, grasp_first=held)
     assert open_air.info["grasp_way"] is not held
 

@@ -79,13 +79,14 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         keep_off: (N, 3) points of what stands near, neither the object nor what it stands on:
             the grasps whose hand would touch fewer of them, coming down onto the object and onto
             the place, are tried first.
-        grasp_first: a grasp to seek a clear chain into storage by before all others
+        grasp_first: a grasp to seek a clear chain by before all others
             (``info["grasp_way"]`` of the pick that took the object out): a box taken out of a
             cabinet by its near edge, grasped again by the edge nearest the robot where it stood on
             the table, came into the cabinet turned, and no route put it back (recursive 1025 of
-            tuning-wide). In the open it is not: the usual grasps close across the line of sight,
-            where the memory places things best, and a bottle held again as it had been taken
-            away, across the line of sight from where it stood, was missed (occlusion 1027).
+            tuning-wide). Fingers closing around the object in the open are not: the usual grasps
+            close across the line of sight, where the memory places things best, and a bottle held
+            again as it had been taken away, across the line of sight from where it stood, was
+            missed (occlusion 1027). Fingertips on a wide box's top are, wherever it stands.
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
@@ -122,11 +123,11 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                          for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
 
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
-    # each, the likeliest first), into storage by ``grasp_first`` before any other; else, as
-    # without such checks, to the first place, the first grasp that reaches at all, unless it is
-    # confined (`_plain_routes`).
+    # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
+    # checks, to the first place, the first grasp that reaches at all, unless it is confined
+    # (`_plain_routes`).
     first = [] if grasp_first is None else [(route, clear) for route, clear in clear_routes([grasp_first])[1]
-                                             if np.any(route.inward)]
+                                             if grasp_first.touch or np.any(route.inward) or np.any(route.out)]
     ways_to, routes = clear_routes(grasps)
     routes = [*first, *routes, *((route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off))]
     for route, clear in routes:

@@ -28,7 +28,16 @@ def nearest_on_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
 
 
 def distance_to_segment(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
-    """How far ``point`` is from the segment from ``start`` to ``end`` (m)."""
+    """How far a point is from a segment.
+
+    Args:
+        point: (3,) the point.
+        start: (3,) one end of the segment.
+        end: (3,) its other end (the same as ``start``: a point).
+
+    Returns:
+        The distance (m).
+    """
     point = np.asarray(point, dtype=float)
     foot = nearest_on_segments(point[None, :], np.array([[start, end]], dtype=float))[0]
     return float(np.linalg.norm(point - foot))
