@@ -344,14 +344,22 @@ def _over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None
     drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm over its top,
     and carried back into it the same way (recursive 1050 of tuning-wide). 0 where nothing
     stands around it."""
-    if keep_off is None or not len(keep_off):
-        return 0.0
-    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
     bottom = float(top[2] - size[2])
-    lo, hi = top[:2] - size[:2] / 2 - RIM_M, top[:2] + size[:2] / 2 + RIM_M
-    around = (np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
-              & (points[:, 2] > bottom + LIFT_SPARE_M) & (points[:, 2] < top[2] + RIM_ABOVE_M))
-    return float(points[around, 2].max() - bottom + LIFT_SPARE_M) if around.any() else 0.0
+    around = _column(keep_off, top, size[:2] / 2 + RIM_M, bottom + LIFT_SPARE_M, top[2] + RIM_ABOVE_M)
+    return float(around[:, 2].max() - bottom + LIFT_SPARE_M) if len(around) else 0.0
+
+
+def _column(keep_off: np.ndarray | None, top: np.ndarray, half: np.ndarray, low: float, high: float
+            ) -> np.ndarray:
+    """The points of ``keep_off`` within ``half`` (m, across x and y) of ``top`` and between the
+    heights ``low`` and ``high``: what stands around an object (`_over_the_rim`) or over it
+    (`_under_a_board`)."""
+    if keep_off is None or not len(keep_off):
+        return np.zeros((0, 3))
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    inside = (np.all(np.abs(points[:, :2] - top[:2]) <= half, axis=1)
+              & (points[:, 2] > low) & (points[:, 2] < high))
+    return points[inside]
 
 
 def _lifts(lift_m: float, size: np.ndarray) -> list[float]:
@@ -385,13 +393,7 @@ def _under_a_board(top: np.ndarray, size: np.ndarray, lift_m: float, keep_off: n
     that drawer, 10 cm from the hand, and a route taken unchecked lifted it into it (recursive 1039
     of tuning-wide); a cabinet's board 12 cm over a box's top, lower than the lift, did not count
     as over it, and a finger went up into the board (recursive 1043)."""
-    if keep_off is None or not len(keep_off):
-        return False
-    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
-    lo, hi = top[:2] - size[:2] / 2, top[:2] + size[:2] / 2
-    over = (np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
-            & (points[:, 2] > top[2] + LIFT_SPARE_M) & (points[:, 2] < top[2] + lift_m + CONFINED_M))
-    return int(np.count_nonzero(over)) >= 3
+    return len(_column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + lift_m + CONFINED_M)) >= 3
 
 
 def _confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
