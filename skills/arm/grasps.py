@@ -20,7 +20,11 @@ object, closing across it) cannot:
   (a wide box at the table's far side: the hand above its middle fell 15 cm short), on the top
   just inside its near edge (`EDGE_INSET_M`), straight down and leaning back towards the robot
   (`EDGE_PITCHES`). The world carries what the fingers hold as it was held, so a box held by its
-  edge is lifted straight up like one held by its middle.
+  edge is lifted straight up like one held by its middle;
+- an object's side (`side_grasps`): the hand level, the closed fingertips against the middle of
+  the side that faces the robot, low on it. Under a board close over a box in a cabinet no hand
+  on its top has room for the wrist above it; one at its side needs room only to lift it clear of
+  what it covers.
 
 Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
 surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
@@ -79,6 +83,11 @@ EDGE_INSET_M = 0.03
 #: the order tried: the wrist then stands nearer the base than the fingertips, and at the steepest,
 #: under a board close over the top, out of the storage it reached into.
 EDGE_PITCHES = tuple(math.radians(degrees) for degrees in (0.0, 30.0, 50.0, 65.0))
+#: How high over an object's bottom (m) the TCP of a hand at its side stands: the hand, 6.8 cm
+#: thick across its fingers' plane (`HAND_BOXES`), a centimetre clear of the floor under it.
+SIDE_TCP_HEIGHT_M = 0.08
+#: An object's side is held only where the fingertips meet it this far (m) under its top or more.
+SIDE_BELOW_TOP_M = 0.01
 #: Level grasp variants tried in order: half turns about the gripper's axis, tilts about the
 #: handle's bar (negative: the gripper points down onto a level bar, the hand above it; `tilted`).
 FLIPS = (0.0, math.pi)
@@ -108,7 +117,8 @@ class ObjectGrasp:
     Args:
         rotation: the TCP's 3×3 rotation.
         depth: how far below the grasp point the TCP closes (negative: above it, the fingertips on the top).
-        name: as plans say it ("fingers-around", "fingertips-on-top", "fingertips-on-near-edge").
+        name: as plans say it ("fingers-around", "fingertips-on-top", "fingertips-on-near-edge",
+            "fingertips-on-near-side").
         touch: as for `HandleGrasp`.
         offset: where on the top the grasp is, from its middle (world, horizontal); the thing is
             carried by that point, so its release point shifts by as much.
@@ -386,3 +396,34 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
     return grasps + [ObjectGrasp(top_rotation(sign * closing, pitch, sight), -FINGERTIP_M, "fingertips-on-near-edge",
                                  touch=True, offset=-inset * sight)
                      for pitch in EDGE_PITCHES for sign in (1.0, -1.0)]
+
+
+def side_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D) -> list[ObjectGrasp]:
+    """Level grasps of an object's side facing the robot, by the closed fingertips against it.
+
+    The side is the box's face (its boxes are level and square to the world) whose outward normal
+    points most nearly at the base; the hand comes square onto it, so that both fingertips meet it
+    together (the world holds what both fingers touch), its TCP `SIDE_TCP_HEIGHT_M` over the
+    object's bottom, as low as keeps the hand off the floor under it.
+
+    Args:
+        size: the object's box (dx, dy, dz).
+        point: its grasp point (world, the middle of its top).
+        base_pose: where the base stands.
+
+    Returns:
+        Two grasps, the hand turned half round about its axis between them; none where the object
+        is too low for the fingertips to meet its side (`SIDE_BELOW_TOP_M`) or stands at the base.
+    """
+    size = np.asarray(size, dtype=float)
+    sight = np.asarray(point[:2], dtype=float) - np.asarray(base_pose[:2], dtype=float)
+    if float(size[2]) < SIDE_TCP_HEIGHT_M + SIDE_BELOW_TOP_M or np.linalg.norm(sight) < 1e-6:
+        return []
+    axis = int(np.argmax(np.abs(sight)))
+    into = np.zeros(3)
+    into[axis] = math.copysign(1.0, float(sight[axis]))
+    offset = -(float(size[axis]) / 2 + FINGERTIP_M) * into
+    closing = np.array([-into[1], into[0], 0.0])
+    depth = float(size[2]) - SIDE_TCP_HEIGHT_M
+    return [ObjectGrasp(top_rotation(sign * closing, math.pi / 2, into), depth, "fingertips-on-near-side",
+                        touch=True, offset=offset) for sign in (1.0, -1.0)]

@@ -1,4 +1,4 @@
-"""Plans for picking an object away and back: top-down.
+"""Plans for picking an object away and back: top-down, or, under a board, by its side.
 
 Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto its top (the fingers closing across the line of sight from the robot
 where the object fits that way, since perception places things worst along it, unless the hand
@@ -7,7 +7,11 @@ than the opening is held by the closed fingertips brought down onto its top unti
 `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
 little above where it should, or until it meets what it is put on first (a top a little higher
 than the memory had it holds the arm back without the arm touching anything: the world puts a
-released object down onto whatever is under it), open, back up, ready.
+released object down onto whatever is under it), open, back up, ready. Under a board close over
+it (a box in a cabinet), the hand takes its top's near edge leaning back towards the robot, or,
+where the board leaves too little room for that wrist, the side facing the robot, the hand level
+(`skills.arm.grasps.side_grasps`); the object is drawn straight out of the storage, and the hand
+backs off it level after letting go.
 """
 
 from __future__ import annotations
@@ -22,8 +26,8 @@ from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
-from skills.arm.grasp_lines import searched
-from skills.arm.grasps import UP, ObjectGrasp, hand_touches, object_grasps
+from skills.arm.grasp_lines import APPROACH_M, searched
+from skills.arm.grasps import UP, ObjectGrasp, hand_touches, local_pose, object_grasps, side_grasps
 from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
@@ -39,9 +43,18 @@ STRADDLE_CLEARANCE_M = 0.008
 HIGH_ABOVE_M = 0.12
 #: The stages of a pick in which the hand carries the object, and those on the way to it.
 _CARRYING = frozenset({"lift", "out", "carry", "in", "lower"})
-_COMING = frozenset({"high above the object", "above the object", "before the object"})
+_COMING = frozenset({"high above the object", "above the object", "before the object",
+                     "well before the object's side", "before the object's side"})
+#: The grasps of an object's top near its edge and of its side, tried only under a board.
+EDGE, SIDE = "fingertips-on-near-edge", "fingertips-on-near-side"
+#: How much room (m) over an object's top a hand on its near edge needs for its wrist, leaning back
+#: 65° (`skills.arm.grasps.EDGE_PITCHES`), the steepest tried; under a board lower than that over
+#: the lift, the grasps of its side are tried first (`_clear_routes`).
+LEANING_ROOM_M = 0.19
 #: How far before the pose above the object (towards the robot, m) the hand may come in from.
 BEFORE_M = (0.15, 0.3, 0.45)
+#: How high above its grasp and its release a pick carries an object, unless told.
+LIFT_M = 0.15
 #: A low lift clears the object's own height by this much, and is never lower than `LOW_LIFT_M` (m).
 LIFT_SPARE_M, LOW_LIFT_M = 0.015, 0.05
 #: Grasps of the middle of an object tried for a chain clear all the way, best first, before the
@@ -58,7 +71,7 @@ RIM_M, RIM_ABOVE_M = 0.03, 0.08
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
               extent: Sequence[float], place_point: Sequence[float], *, skill: str = "pick_away",
-              surface_z: float | None = None, lift_m: float = 0.15, clearance_m: float = 0.015,
+              surface_z: float | None = None, lift_m: float = LIFT_M, clearance_m: float = 0.015,
               grasp_depth_m: float | None = None, keep_off: np.ndarray | None = None,
               grasp_first: ObjectGrasp | None = None) -> SkillPlan:
     """Pick an object and put it down elsewhere (see the module doc).
@@ -115,12 +128,15 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     builder = PlanBuilder(arm, here, base_pose, surface_z, around)
     failures: list[str] = []
     toward = _toward(base_pose, top)
-    grasps = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth)
+    grasps = [*object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth),
+              *side_grasps(size, top, base_pose)]
+    room = min(_headroom(point, size, keep_off, lift_m + LEANING_ROOM_M) for point in (top, *places))
 
     def clear_routes(choices: list[ObjectGrasp]) -> tuple[list[list[_Way]], list[tuple[_Route, bool]]]:
         ways_to = [_ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
         return ways_to, [(route, True) for place, ways in zip(places, ways_to, strict=True)
-                         for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place))]
+                         for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place),
+                                                    room)]
 
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
@@ -144,19 +160,25 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
             if not clear:
                 chains = ik.chain(stages)
             elif np.any(route.inward):  # into storage: from inside it first, then as it came
-                chains = _retraced(ik, stages, check) or ik.clear_chain(stages, check)
+                chains = _retraced(ik, stages, check, route.backs_off) or ik.clear_chain(stages, check)
             else:
                 chains = ik.clear_chain(stages, check)
             if chains is None:
                 continue
             named = dict(zip((stage[0] for stage in stages), chains))
             down = route.down
-            named[down] = searched(ik, named[down], grasp, down, straight_down=True) if way.touch else named[down]
+            if way.touch:
+                named[down] = searched(ik, named[down], grasp, down, straight_down=not route.backs_off)
         except SkillPlanError as error:
             failures.append(str(error))
             continue
-        route.build(builder, named)
         place = release[:3, 3] - way.offset - (clearance_m - way.depth) * UP
+        # Away from it, the arm keeps off the thing just put down: a hand backed off level from a
+        # box's side, low beside it, swept a finger into it on its way to the ready pose (recursive
+        # 1075 of tuning-wide).
+        leaving = Clearance(arm, base_transform(base_pose), surface_z,
+                            np.vstack([near, box_points(place - size[2] / 2 * UP, size)]))
+        route.build(builder, named, leaving)
         info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
                 "grasp_depth_m": way.depth, "grasp": way.name, "grasp_way": way, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
@@ -166,7 +188,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     raise SkillPlanError(best_failure(failures, "pick"))
 
 
-def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCheck) -> list[np.ndarray] | None:
+def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCheck, backs_off: bool = False
+              ) -> list[np.ndarray] | None:
     """The waypoints of a chain clear all the way (`IKSearch.clear_chain`) worked out from where
     it lets go back to where it begins, then turned round: the arm postures inside the storage
     the object goes into are those a pick out of it found, and the way out of there is the way in.
@@ -177,11 +200,13 @@ def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCh
     Args:
         stages: the route's stages (`_Route.stages`): a free one, lines, and the back-up last.
         check: as for `IKSearch.clear_chain`.
+        backs_off: the back-up is a line of its own (a hand at the object's side backs off level),
+            worked out with the others, where it otherwise retraces the lowering.
 
     Returns:
         Each stage's waypoints in the order of ``stages``, or None where no posture passes.
     """
-    *forward, _ = stages  # the back-up retraces the lowering
+    forward = stages if backs_off else stages[:-1]  # else the back-up retraces the lowering
     last = len(forward) - 1
     backwards = [(forward[last][0], "free", forward[last][2])]
     backwards += [(forward[k][0], "line", forward[k - 1][2]) for k in range(last, 0, -1)]
@@ -189,7 +214,7 @@ def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCh
     if found is None:
         return None
     chains = [found[-1][-1][None, :], *(found[last - k + 1][::-1] for k in range(1, last + 1))]
-    return [*chains, chains[-1][::-1]]
+    return chains if backs_off else [*chains, chains[-1][::-1]]
 
 
 def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
@@ -215,7 +240,7 @@ def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: n
     """Each grasp's way to ``place``, those whose hand touches fewer of ``keep_off`` coming straight
     down onto the object and onto the place first (stable: else best first)."""
     ways = []
-    boarded = [_under_a_board(point, size, lift_m, keep_off) for point in (top, place)]
+    boarded = [under_a_board(point, size, keep_off, lift_m) for point in (top, place)]
     for way in grasps:
         grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
@@ -242,8 +267,19 @@ class _Route:
     inward: np.ndarray
 
     @property
+    def backs_off(self) -> bool:
+        """Whether the hand holds the object's side: it comes onto it and backs off from it level."""
+        return self.way.name == SIDE
+
+    @property
     def down(self) -> str:
+        if self.backs_off:
+            return "in onto the object's side"
         return "down onto the object's top" if self.way.touch else "down onto the object"
+
+    @property
+    def back(self) -> str:
+        return "back off" if self.backs_off else "back up"
 
     def stages(self) -> list[tuple[str, str, Any]]:
         """The chain's stages: the approach, down, lift, out, carry, in, lower, back up."""
@@ -254,17 +290,18 @@ class _Route:
         stages.append(("carry", "line", shifted(above_release, self.inward)))
         if np.any(self.inward):
             stages.append(("in", "line", above_release))
-        return stages + [("lower", "line", self.release), ("back up", "line", above_release)]
+        back = self.release @ local_pose(z=-APPROACH_M) if self.backs_off else above_release
+        return stages + [("lower", "line", self.release), (self.back, "line", back)]
 
-    def build(self, builder: PlanBuilder, named: dict[str, np.ndarray]) -> None:
-        """The plan's steps from the stages' waypoints (``named`` by stage)."""
+    def build(self, builder: PlanBuilder, named: dict[str, np.ndarray], leaving: Clearance) -> None:
+        """The plan's steps from the stages' waypoints (``named`` by stage); the move to the ready
+        pose at the end keeps clear of ``leaving``."""
         targets = {what: target for what, _, target in self.stages()}
         first = self.approach[0][0]
         builder.free_move(f"to {first}", named[first][-1])
-        if first != "above the object":
-            way_in = "down to above the object" if first.startswith("high") else "in to above the object"
-            builder.move(way_in, named["above the object"], careful=True, stop_on_contact=True,
-                         tcp_target=targets["above the object"])
+        for what, _, target in self.approach[1:]:
+            builder.move(f"{'down' if first.startswith('high') else 'in'} to {what}", named[what], careful=True,
+                         stop_on_contact=True, tcp_target=target)
         builder.grasp(self.way, self.down, named[self.down], self.grasp, "object")
         for what in ("lift", "out", "carry", "in"):  # what it carries meeting a door or drawer stops it
             if what in named:
@@ -272,12 +309,12 @@ class _Route:
                              tcp_target=targets[what])
         builder.move("lower", named["lower"], careful=True, tcp_target=self.release, touch="support")
         builder.gripper("open", "put the object down")
-        builder.move("back up", named["back up"], careful=True, tcp_target=targets["back up"])
-        builder.free_move("to ready", builder.arm.ready, via_ready=False)
+        builder.move(self.back, named[self.back], careful=True, tcp_target=targets[self.back])
+        builder.free_move("to ready", builder.arm.ready, via_ready=False, clearance=leaving)
 
 
 def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
-                  toward: np.ndarray, to_place: np.ndarray) -> list[_Route]:
+                  toward: np.ndarray, to_place: np.ndarray, room: float = np.inf) -> list[_Route]:
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
     In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
@@ -285,27 +322,36 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     robot's side (`_detours`).
     Where a board stands close over the object or its place (`_confined`: a box inside a cabinet)
     a hand straight down has no room for its wrist: the top's near edge is grasped, the hand
-    leaning back towards the robot, the steepest first; the object is lifted only as high as
-    clears what it covers first (`_lifts`); the hand comes in directly or from before the pose
-    above it; and the object is drawn straight out of the storage before the carry, or brought
-    straight into it after, by each of `BEFORE_M`."""
+    leaning back towards the robot, the steepest first, or the side that faces the robot, the hand
+    level, first where the board leaves less than `LEANING_ROOM_M` over the lift (``room``: the
+    lowest board over the object's top or its place, `_headroom`); the object is lifted only as
+    high as clears what it covers first (`_lifts`); the hand comes in directly or from before the
+    pose above it (onto a side: from before it, `_side_approaches`); and the object is drawn
+    straight out of the storage before the carry, or brought straight into it after, by each of
+    `BEFORE_M` (held by its side: square to that side)."""
     routes = []
-    open_ways = [entry for entry in ways if entry.grasp_way.name != "fingertips-on-near-edge"][:CLEAR_GRASPS]
-    edge_ways = sorted((entry for entry in ways if entry.grasp_way.name == "fingertips-on-near-edge"),
+    open_ways = [entry for entry in ways if entry.grasp_way.name not in (EDGE, SIDE)][:CLEAR_GRASPS]
+    edge_ways = sorted((entry for entry in ways if entry.grasp_way.name == EDGE),
                        key=lambda entry: -float(entry.grasp_way.rotation[2, 2]))  # the steepest lean first
-    for entry in [*edge_ways, *open_ways]:
+    side_ways = [entry for entry in ways if entry.grasp_way.name == SIDE]
+    tight = room < _lifts(lift_m, size)[-1] + LEANING_ROOM_M
+    for entry in [*(side_ways + edge_ways if tight else edge_ways + side_ways), *open_ways]:
         way, grasp, release = entry.grasp_way, entry.grasp, entry.release
         here, there = entry.confined_here, entry.confined_there
-        if way.name == "fingertips-on-near-edge" and not (here or there):
+        if way.name in (EDGE, SIDE) and not (here or there):
             continue
+        out_along, in_along = (-way.rotation[:, 2], -way.rotation[:, 2]) if way.name == SIDE else (toward, to_place)
         for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
-            approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
+            if way.name == SIDE:
+                approaches = _side_approaches(grasp)
+            else:
+                approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
             for approach in approaches:
                 for out, inward in _detours(here, there):
-                    routes.append(_Route(way, grasp, release, lift, tuple(approach), out * toward,
-                                         inward * to_place))
+                    routes.append(_Route(way, grasp, release, lift, tuple(approach), out * out_along,
+                                         inward * in_along))
     def confined(route: _Route) -> bool:  # open routes first, stable: else in the order built
-        return bool(np.any(route.out) or np.any(route.inward) or route.way.name == "fingertips-on-near-edge")
+        return bool(np.any(route.out) or np.any(route.inward) or route.way.name in (EDGE, SIDE))
 
     return sorted(routes, key=confined)[:CLEAR_ROUTES]
 
@@ -330,7 +376,7 @@ def _plain_routes(ways: list[_Way], lift_m: float, keep_off: np.ndarray | None) 
     none = np.zeros(3)
     routes = []
     for entry in ways:
-        if entry.confined_here or entry.confined_there:
+        if entry.confined_here or entry.confined_there or entry.grasp_way.name == SIDE:
             continue
         above = shifted(entry.grasp, lift_m * UP)
         for approach in _approaches(above, keep_off, none, before=False):
@@ -353,7 +399,7 @@ def _column(keep_off: np.ndarray | None, top: np.ndarray, half: np.ndarray, low:
             ) -> np.ndarray:
     """The points of ``keep_off`` within ``half`` (m, across x and y) of ``top`` and between the
     heights ``low`` and ``high``: what stands around an object (`_over_the_rim`) or over it
-    (`_under_a_board`)."""
+    (`under_a_board`)."""
     if keep_off is None or not len(keep_off):
         return np.zeros((0, 3))
     points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
@@ -386,7 +432,24 @@ def _approaches(above: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarr
     return approaches
 
 
-def _under_a_board(top: np.ndarray, size: np.ndarray, lift_m: float, keep_off: np.ndarray | None) -> bool:
+def _headroom(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, within: float) -> float:
+    """How far (m) over the object's top, its top at ``top``, the lowest thing over it stands;
+    inf where nothing does ``within`` that height."""
+    over = _column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + within)
+    return float(over[:, 2].min() - top[2]) if len(over) else np.inf
+
+
+def _side_approaches(grasp: np.ndarray) -> list[list[tuple[str, str, Any]]]:
+    """Ways for a hand at an object's side to the pose before it (`APPROACH_M` back along its
+    level axis): directly, and from as far again further back, straight in: through the opening
+    of a cabinet, under its board."""
+    before = grasp @ local_pose(z=-APPROACH_M)
+    return [[("before the object's side", "free", before)],
+            [("well before the object's side", "free", grasp @ local_pose(z=-2 * APPROACH_M)),
+             ("before the object's side", "line", before)]]
+
+
+def under_a_board(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, lift_m: float = LIFT_M) -> bool:
     """Whether something stands over the object's own top, its top at ``top``, below where it is
     lifted to and `CONFINED_M` over that: over its middle, not only over the hand (`_confined`).
     A box held by its near edge in a drawer pulled out from under a closed one stood half under

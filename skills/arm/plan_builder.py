@@ -112,7 +112,8 @@ class PlanBuilder:
         self.steps.append(self.step(name, waypoints, careful, stop_on_contact, tcp_target, part_motion, touch))
         self.q = self.steps[-1].waypoints[-1].copy()
 
-    def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True) -> None:
+    def free_move(self, name: str, goal: np.ndarray, via_ready: bool = True, clearance: Clearance | None = None
+                  ) -> None:
         """Add a joint-space move to ``goal`` that stops on contact.
 
         It goes by way of the ready pose when the arm starts or ends stowed (the way out of the
@@ -127,11 +128,14 @@ class PlanBuilder:
             name: what the move does.
             goal: the joint positions to end at.
             via_ready: go by way of the ready pose into and out of the stowed pose.
+            clearance: what this move keeps clear of, where that is not the plan's own
+                (``clearance``): the move away from a thing just put down keeps off it too.
 
         Raises:
             SkillPlanError: even the top of the lift's travel dips too low, or no trajectory.
         """
         arm = self.arm
+        checks = self.clearance if clearance is None else clearance
         goal = np.asarray(goal, dtype=float)
         start = [self.q]
         stowed = arm.stowed is not None and np.abs(self.q - arm.stowed).max() < FOLDED_RAD
@@ -142,26 +146,26 @@ class PlanBuilder:
         if into_stow:
             end.insert(0, arm.ready)
         routes = [*self._over_the_surface(start, end)]
-        if self.clearance is not None and not any(np.abs(q - arm.ready).max() < FOLDED_RAD for q in (*start, *end)):
+        if checks is not None and not any(np.abs(q - arm.ready).max() < FOLDED_RAD for q in (*start, *end)):
             routes += self._over_the_surface([*start, arm.ready], end)  # folded in on the way
         target = self.base @ arm.kin.forward(goal)
         low = math.inf
         above: Step | None = None  # the first route that keeps the hand above the surface
         clear = False
         # a goal posture that itself touches (the arm at an open door's handle lies along its leaf)
-        arrival = end[0] if self.clearance is not None and self.clearance.problem(end[0], hand=True) else None
+        arrival = end[0] if checks is not None and checks.problem(end[0], hand=True) else None
         for waypoints in routes:
             step = self.step(name, waypoints, careful=False, stop_on_contact=True, tcp_target=target)
             low = self.lowest(step)
             if self.surface_z is not None and low < self.surface_z + SURFACE_CLEARANCE_M:
                 continue
             above = above or step
-            if self.clearance is None or self.clearance.path_problem(
+            if checks is None or checks.path_problem(
                     self._checked(step, via_ready and stowed, into_stow, arrival), every=3, hand=True) is None:
                 above, clear = step, True
                 break
-        if not clear and self.clearance is not None:
-            above = self._way_round(name, start, end, target, arrival is not None) or above
+        if not clear and checks is not None:
+            above = self._way_round(name, start, end, target, checks, arrival is not None) or above
         if above is None:
             assert self.surface_z is not None
             raise SkillPlanError(f"free move: {name}: the hand would come down to {low:.3f} m, "
@@ -186,15 +190,13 @@ class PlanBuilder:
         return samples
 
     def _way_round(self, name: str, start: list[np.ndarray], end: list[np.ndarray], target: np.ndarray,
-                   arriving_touched: bool = False) -> Step | None:
+                   clearance: Clearance, arriving_touched: bool = False) -> Step | None:
         """A free move round what stands near (`skills.arm.free_path`), for when no straight route is
         clear: the whole arm clear of it, the hand above the surface. Where the arm starts touching
         something (the door it let go of), the first `ESCAPE_RAD` of the way out are not held
         against it; with ``arriving_touched`` (the way's end touches something), nor the last
         `ESCAPE_RAD` of the way in. None when no way is found, or the trajectory through the way's
         waypoints strays into something."""
-        clearance = self.clearance
-        assert clearance is not None
         origin = start[-1]
 
         def valid(q: np.ndarray) -> bool:
