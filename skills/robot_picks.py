@@ -21,13 +21,14 @@ import numpy as np
 
 from agent.acsg.from_memory import Box
 from agent.acsg.interfaces import SkillResult
-from agent.acsg.keep_clear import kept_clear
-from agent.perception.grasp_poses import LEAST_EXTENT_M, seen_extent, top_grasp_point
+from agent.acsg.keep_clear import kept_clear, way_out
+from agent.perception.grasp_poses import standing_extent, top_grasp_point
 from agent.perception.hidden_bodies import closed_drawer_faces
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.grasps import ObjectGrasp
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
+from skills.arm.pick_plans import under_a_board
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody, surface_top
@@ -47,6 +48,9 @@ PLACES, PLACES_APART_M = 3, 0.15
 #: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
 #: along the table's edge to a stand from which both lie within this.
 PLACE_REACH_M = 0.8
+#: How high (m) over the surface the lane a thing came out of storage along stands for
+#: `idle_spot` (`way_out`): above its top, where the points of things count.
+LANE_ABOVE_M = 0.03
 
 
 @dataclass(frozen=True)
@@ -100,10 +104,12 @@ class Picks:
         if body.home is None:
             raise SkillPlanError("the robot has not looked yet")
         points = obj.points()
-        top, extent, box = top_grasp_point(points), seen_extent(points), obj.bounds
+        top, box = top_grasp_point(points), obj.bounds
         surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
+        keep_off = self._near(obj)
+        extent = standing_extent(points, np.vstack([keep_off, surface.points()]))
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
         toward = np.asarray(body.home[:2]) - top[:2]
         near = top[:2] + self.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
@@ -121,6 +127,8 @@ class Picks:
 
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with())
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
+        if under_a_board(top, extent, keep_off):  # out of storage: not down in its way out
+            obstacles.append(way_out(top, radius, body.home[:2], surface_top(surface) + LANE_ABOVE_M))
         options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
         try:  # beyond the strip the arm works over from the robot's stands; else in it
             spots = idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
@@ -138,9 +146,9 @@ class Picks:
         lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
         spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
         self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
-        places = spots + np.array([0.0, 0.0, max(top[2] - box[0][2], LEAST_EXTENT_M)])  # its top, as it stands
+        places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                          surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=self._near(obj))
+                          surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=keep_off)
         if not result.ok:
             return SkillResult(False, result.reason)
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
@@ -219,7 +227,7 @@ class Picks:
         if float(np.linalg.norm(now[:2] - away.placed_point[:2])) <= MOVED_M:
             now = np.array([*away.placed_point[:2], now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
-                          surface_z=body.surface_z(away.grasp_point - np.array([0.0, 0.0, away.extent[2] - 0.01])),
+                          surface_z=body.surface_z(away.grasp_point),  # under its place, below its top
                           label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
                           keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:

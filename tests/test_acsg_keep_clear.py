@@ -4,9 +4,11 @@ handles (`agent.acsg.keep_clear`), read off a memory of a rendered drawer chest.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from agent.acsg.keep_clear import kept_clear
+from agent.acsg.keep_clear import kept_clear, way_out
 from agent.perception.memory import InstanceMemory
+from skills.arm.idle_space import idle_spot
 from test_perception_scene import INTRINSICS, Box, Front, look_at, render, storage
 
 EYE = np.array([0.0, -0.8, 1.45])
@@ -37,3 +39,20 @@ def test_the_space_of_a_part_done_with_is_the_table_s_again() -> None:
     assert both_done == []
     # what is left is the upper drawer's: its sweep and lane stand at its height, above the lower's top
     assert lower_done[:, 2].min() > 0.93 - 0.05
+
+
+def test_a_thing_taken_out_of_storage_is_not_put_down_in_the_lane_it_came_out_along() -> None:
+    # A box 18 cm across taken out of a cabinet at the table's far side (y = 0.3): put down just
+    # before the cabinet, in its way out, it hid what it had covered from the robot and stood in
+    # the way of the hand reaching in for it.
+    xs, ys = np.meshgrid(np.arange(-0.6, 0.6, 0.01), np.arange(-0.4, 0.2, 0.01))
+    table = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.75)])
+    stood, robot, radius = np.array([0.1, 0.3, 0.85]), np.array([0.1, -0.9]), 0.09
+    lane = way_out(stood, radius, robot, 0.78)
+    assert lane[:, 1].max() <= stood[1] + 1e-9 and lane[:, 1].min() > robot[1] - 0.05
+    assert np.allclose(lane[:, 2], 0.78) and np.ptp(lane[:, 0]) == pytest.approx(2 * radius)
+    near = (0.1, 0.05)  # before the cabinet, towards the robot
+    assert abs(idle_spot(table, [], radius, near)[0] - 0.1) < 0.01  # in its way out, without the lane
+    spot = idle_spot(table, [lane], radius, near)
+    assert abs(spot[0] - 0.1) >= 2 * radius  # beside it, clear of it, with the lane
+    assert len(way_out(stood, radius, stood[:2], 0.78)) == 0

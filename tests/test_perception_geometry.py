@@ -19,6 +19,7 @@ from agent.perception.grasp_poses import (
     opening_waypoints,
     pregrasp_pose,
     seen_extent,
+    standing_extent,
     top_grasp_point,
 )
 from agent.perception.memory import InstanceMemory
@@ -275,3 +276,20 @@ def test_a_thing_seen_only_from_above_still_has_some_height() -> None:
     assert seen_extent(whole) == pytest.approx(np.ptp(whole, axis=0))
     with pytest.raises(GeometryError, match="points"):
         seen_extent(np.zeros((0, 3)))
+
+
+def test_a_thing_whose_lower_part_is_hidden_reaches_down_to_what_it_stands_on() -> None:
+    """A box in a cabinet seen from above over the cabinet's floor: its upper 7 cm seen, the floor
+    under it at 0.76 m. It reaches down to the floor; the cabinet's walls beside it, a shelf over
+    it and a floor further down than anything could hide do not count."""
+    rng = np.random.default_rng(6)
+    upper = rng.uniform((0.0, 0.0, 0.82), (0.14, 0.14, 0.89), (300, 3))
+    xs, ys = np.meshgrid(np.arange(-0.1, 0.25, 0.01), np.arange(-0.1, 0.25, 0.01))
+    floor = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.76)])
+    walls = np.array([(x, y, z) for x in (-0.005, 0.145) for y in np.arange(0.0, 0.14, 0.01)
+                      for z in np.arange(0.76, 1.0, 0.01)])
+    shelf = floor + [0.0, 0.0, 0.3]
+    assert standing_extent(upper, np.vstack([floor, walls, shelf]))[2] == pytest.approx(0.89 - 0.76, abs=0.003)
+    assert standing_extent(upper, np.vstack([walls, shelf]))[2] == pytest.approx(np.ptp(upper[:, 2]))
+    assert standing_extent(upper, floor - [0.0, 0.0, 0.3])[2] == pytest.approx(np.ptp(upper[:, 2]))
+    assert standing_extent(upper, None) == pytest.approx(seen_extent(upper))

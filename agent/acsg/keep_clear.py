@@ -65,3 +65,34 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
             lane = handle_at + np.arange(0.0, out, LANE_STEP_M)[:, None] * geometry.normal
             kept.extend(lane + offset * across for offset in offsets)
     return kept
+
+
+def way_out(point: np.ndarray, half_width: float, robot_xy: np.ndarray, z: float) -> np.ndarray:
+    """Points of the lane a thing taken out of storage came out along, for `idle_spot` to keep the
+    thing off: from ``point`` (where it stood) straight towards the robot at ``robot_xy``,
+    ``half_width`` (m) to either side, at height ``z``. Put down in that lane, in front of the
+    cabinet it came from, a box hid the lower half of the smaller box it had covered from the
+    robot's cameras and stood in the way of the hand reaching in for it (recursive 1075 of
+    tuning-wide).
+
+    Args:
+        point: where the thing stood (world; its x, y count).
+        half_width: how far to either side of its line the lane reaches (m).
+        robot_xy: where the robot stands (world x, y).
+        z: the height to give the points (above the surface the lane crosses).
+
+    Returns:
+        (N, 3) points, `LANE_STEP_M` apart along and across the lane; none where the robot stands
+        at ``point``.
+    """
+    start = np.asarray(point, dtype=float)[:2]
+    toward = np.asarray(robot_xy, dtype=float)[:2] - start
+    length = float(np.linalg.norm(toward))
+    if length < 1e-6:
+        return np.zeros((0, 3))
+    toward /= length
+    across = np.array([-toward[1], toward[0]])
+    along = np.arange(0.0, length, LANE_STEP_M)
+    offsets = np.linspace(-half_width, half_width, max(2, int(np.ceil(2 * half_width / LANE_STEP_M)) + 1))
+    xy = (start + along[:, None, None] * toward + offsets[None, :, None] * across).reshape(-1, 2)
+    return np.column_stack([xy, np.full(len(xy), z)])
