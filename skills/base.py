@@ -31,8 +31,10 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
 
 A failure while the hand holds something, or with its fingers closed, first opens the gripper
 (RUNNING until it has), so the base is not left tied to furniture and the next grasp starts with
-the fingers open, then fails. `skills.running.run_to_end` runs one skill to its end, for the
-scene-graph executor, scripts and tests.
+the fingers open, then fails. An object the hand carries is first carried back along the moves
+made since it was grasped (`skills.arm.retrace.way_back`), at the careful speed, and so put down
+where it was grasped rather than wherever the arm stopped. `skills.running.run_to_end` runs one
+skill to its end, for the scene-graph executor, scripts and tests.
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from py_trees.common import Status
 from worlds.bus.codec import Message
 from worlds.bus.rpc import PendingReply, QueryFailed
 from skills.arm.planner import ArmPlanner
+from skills.arm.retrace import way_back
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.context import SkillContext
 from skills.ports import Port, PortedSkill, input_port, output_port
@@ -195,6 +198,8 @@ class ArmSkill(PortedSkill):
             return self._planned(message)
         if self._phase == "release":
             return self._released(message)
+        if self._phase == "carry back":
+            return self._carried_back(message)
         return self._step_done(message)
 
     def terminate(self, new_status: Status) -> None:
@@ -302,6 +307,8 @@ class ArmSkill(PortedSkill):
             return "asking for the arm's state"
         if self._phase == "release":
             return "letting go after a failure"
+        if self._phase == "carry back":
+            return "carrying the object back to where it was grasped after a failure"
         if self._holding_still:
             return "holding the arm still before letting go"
         if self._index < len(self._steps):
@@ -333,23 +340,58 @@ class ArmSkill(PortedSkill):
         if self._phase == "run" and last is not None and (last.get("held") is not None
                                                           or last["gripper_width"] < FINGERS_CLOSED_M):
             # do not stay tied to furniture, nor start the next grasp with closed fingers: open
-            # first, then fail (see `_released`)
+            # first, then fail (see `_released`); an object carried goes back where it was grasped
             held = last.get("held")
-            self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {thing_name(held)})"
-            try:
-                self._pending = self._ask("gripper", {"action": "open"})
-            except QueryFailed as error:
-                return self._failed(f"{self._failure}; but letting go failed: {error}")
-            self.feedback_message = self._doing()
-            return Status.RUNNING
+            back = self._carry_back() if held is not None else None
+            if back is not None:
+                self._phase, self._failure = "carry back", f"{reason} (carried back to where it was grasped)"
+                return self._send(lambda: self._send_move(back))
+            return self._let_go(reason)
         return self._failed(reason)
 
+    def _carry_back(self) -> Step | None:
+        """The move carrying the object the hand holds back along the moves made since it was
+        grasped (`way_back`), from where the arm stopped; None when the hand grasped no object in
+        this plan (a handle is let go of where it is)."""
+        planner = self.context.planner
+        grasps = [k for k, step in enumerate(self._steps[:self._index])
+                  if step.kind == "gripper" and step.action == "close" and step.expect_held == "object"]
+        if planner is None or not grasps or self._last is None:
+            return None
+        moves = [step for step in self._steps[grasps[-1] + 1:self._index + 1] if step.samples is not None]
+        if not moves:
+            return None
+        waypoints = planner.kin.clip(way_back(moves, self._last["q"]))
+        return Step("move", "carry back to where it was grasped", planner.samples(waypoints, planner.careful_speed),
+                    planner.dt, waypoints, planner.careful_speed)
+
+    def _let_go(self, reason: str) -> Status:
+        """Open the gripper, then fail with ``reason`` (and what was let go of)."""
+        held = (self._last or {}).get("held")
+        self._phase, self._failure = "release", reason if held is None else f"{reason} (let go of {thing_name(held)})"
+        try:
+            self._pending = self._ask("gripper", {"action": "open"})
+        except QueryFailed as error:
+            return self._failed(f"{self._failure}; but letting go failed: {error}")
+        self.feedback_message = self._doing()
+        return Status.RUNNING
+
+    def _carried_back(self, message: Message) -> Status:
+        """The object is back where it was grasped (or as near as the move got): let go of it."""
+        self._take_state(message)
+        return self._let_go(self._failure)
+
     def _released(self, message: Message) -> Status:
+        self._take_state(message)
+        return self._failed(self._failure)
+
+    def _take_state(self, message: Message) -> None:
+        """Keep the arm state a reply after a failure carries, if it is well formed (the failure
+        is reported either way)."""
         try:
             self._last = arm_state(message.meta)
         except ValueError:
             pass
-        return self._failed(self._failure)
 
     def _failed(self, reason: str) -> Status:
         self._phase = "failed"

@@ -229,6 +229,24 @@ def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) 
     assert np.linalg.norm(returned - start) < 0.02
 
 
+def test_an_object_whose_carry_meets_a_drawer_is_carried_back_and_put_down_where_it_stood(link: WorldLink) -> None:
+    # Sent to a place overlapping the chest's drawer fronts, the can held at carrying height meets
+    # a drawer: the arm stops, and the can, carried back along the way it came, is put down
+    # where it was grasped; let go of where the arm stopped, a box stood on a drawer's edge, out of
+    # its place for good (recursive 1037 of tuning-wide).
+    can, memory, _, seen, start = _facing_object_on_the_table(link, "drawer-only", 6, "can")
+    chest = next(pl for _, pl in tabletop_variant("drawer-only", 6).storage if pl.model.model == "drawer_chest")
+    top, extent = top_grasp_point(seen.points()), np.ptp(seen.points(), axis=0)
+    into = chest.pose[:3] + np.array([-chest.model.size[0] / 4, -chest.model.size[1] / 2 - 0.01, 0.0])
+    into[2] = top[2]  # the can's middle a centimetre before the fronts: into the drawer's and its handle
+    result = _run(PickAway, link, object_point=top, object_extent=extent, place_point=into)
+    assert not result.ok
+    assert result.reason.startswith("pick_away: carry: ") and "(carried back to where it was grasped)" in result.reason
+    assert result.held is None
+    now = _pixels(_observe(link, memory), can.instance_id).mean(axis=0)
+    assert np.linalg.norm(now - start) < 0.02  # standing where it stood
+
+
 def _contacts_other_than(result: SkillResult, *categories: str) -> list[str]:
     """What the arm touched over a skill, beyond the given kinds of thing."""
     return [f"{c['category']} ({c['robot_link']})" for c in result.contacts if c["category"] not in categories]
