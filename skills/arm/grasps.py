@@ -1,9 +1,9 @@
-"""The hand's shape, and the grasps that hold a thing by resting the closed fingertips on its top.
+"""The hand's shape, and the grasps that hold a thing by resting the closed fingertips on it.
 
 The world holds whatever the closed fingers touch (`worlds.sim.World.gripper`): a handle is tied
 to the hand, an object carried with it. A thing need not fit between the fingers to be held, then:
-with the fingers closed first, their tips brought down onto its top until they touch, closing
-again holds it. Two grasps do that where the usual one (the fingers open around a bar or an
+with the fingers closed first, their tips brought onto it until they touch, closing again holds
+it. Three grasps do that where the usual one (the fingers open around a bar or an
 object, closing across it) cannot:
 
 - a level bar from above (`handle_top_grasps`). The usual grasp of a bar (`level_grasps`) closes
@@ -24,12 +24,12 @@ object, closing across it) cannot:
 - an object's side (`side_grasps`): the hand level, the closed fingertips against the middle of
   the side that faces the robot, low on it. Under a board close over a box in a cabinet no hand
   on its top has room for the wrist above it; one at its side needs room only to lift it clear of
-  what it covers.
+  what it covers, and for the wrist's links beside the hand.
 
-Both are *touch* grasps: perception places a top to within half a voxel, and a hand closing on a
-surface must meet it, so the approach goes on past where the top is expected (`TOUCH_SEARCH_M`)
-and ends on the first touch (`skills.arm.skill_plan.Step.touch`); what follows is planned from where the
-top was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
+All are *touch* grasps: perception places a top or a side to within half a voxel, and a hand
+closing on a surface must meet it, so the approach goes on past where the surface is expected
+(`TOUCH_SEARCH_M`) and ends on the first touch (`skills.arm.skill_plan.Step.touch`); what follows
+is planned from where the surface was expected, and re-timed from where the arm stopped. Letting go of a bar so held, the
 fingertips lift straight off it (`LIFT_OFF_M`) before the hand backs off along its pitched axis,
 which would drag the bar out with them.
 
