@@ -455,7 +455,17 @@ def under_a_board(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None
     A box held by its near edge in a drawer pulled out from under a closed one stood half under
     that drawer, 10 cm from the hand, and a route taken unchecked lifted it into it (recursive 1039
     of tuning-wide); a cabinet's board 12 cm over a box's top, lower than the lift, did not count
-    as over it, and a finger went up into the board (recursive 1043)."""
+    as over it, and a finger went up into the board (recursive 1043).
+
+    Args:
+        top: the middle of the object's top (world).
+        size: its box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+        lift_m: how high it is to be lifted.
+
+    Returns:
+        Whether three or more of ``keep_off`` stand over its footprint there.
+    """
     return len(_column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + lift_m + CONFINED_M)) >= 3
 
 
