@@ -27,8 +27,8 @@ from agent.perception.hidden_bodies import closed_drawer_faces
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.grasps import ObjectGrasp
+from skills.arm.headroom import under_a_board
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
-from skills.arm.pick_plans import under_a_board
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody, surface_top

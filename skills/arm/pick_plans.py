@@ -1,9 +1,9 @@
 """Plans for picking an object away and back: top-down, or, under a board, by its side.
 
-Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto its top (the fingers closing across the line of sight from the robot
-where the object fits that way, since perception places things worst along it, unless the hand
-would touch less of what stands near coming down another way; an object wider
-than the opening is held by the closed fingertips brought down onto its top until they touch,
+Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto its top (the
+fingers closing across the line of sight from the robot where the object fits that way, since
+perception places things worst along it, unless the hand would touch less of what stands near
+coming down another way; an object wider than the opening is held by the closed fingertips brought down onto its top until they touch,
 `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
 little above where it should, or until it meets what it is put on first (a top a little higher
 than the memory had it holds the arm back without the arm touching anything: the world puts a
@@ -11,7 +11,8 @@ released object down onto whatever is under it), open, back up, ready. Under a b
 it (a box in a cabinet), the hand takes its top's near edge leaning back towards the robot, or,
 where the board leaves too little room for that wrist, the side facing the robot, the hand level
 (`skills.arm.grasps.side_grasps`); the object is drawn straight out of the storage, and the hand
-backs off it level after letting go.
+backs off it level after letting go. What stands over and around the object, and the room it
+leaves, is `skills.arm.headroom`'s.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import APPROACH_M, searched
 from skills.arm.grasps import UP, ObjectGrasp, hand_touches, local_pose, object_grasps, side_grasps
+from skills.arm.headroom import LIFT_M, LIFT_SPARE_M, confined, headroom, over_the_rim, under_a_board
 from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
@@ -53,20 +55,14 @@ EDGE, SIDE = "fingertips-on-near-edge", "fingertips-on-near-side"
 LEANING_ROOM_M = 0.19
 #: How far before the pose above the object (towards the robot, m) the hand may come in from.
 BEFORE_M = (0.15, 0.3, 0.45)
-#: How high above its grasp and its release a pick carries an object, unless told.
-LIFT_M = 0.15
-#: A low lift clears the object's own height by this much, and is never lower than `LOW_LIFT_M` (m).
-LIFT_SPARE_M, LOW_LIFT_M = 0.015, 0.05
+#: A low lift clears the object's own height by `skills.arm.headroom.LIFT_SPARE_M`, and is never
+#: lower than this (m) (`_lifts`).
+LOW_LIFT_M = 0.05
 #: Grasps of the middle of an object tried for a chain clear all the way, best first, before the
 #: grasps of its near edge and settling for one that merely reaches; routes tried so at the most.
 CLEAR_GRASPS, CLEAR_ROUTES = 4, 48
 #: How far (m) a carry in the open goes round by the robot's side when straight across is not clear.
 DETOUR_M = 0.25
-#: How far over the pose above an object (m) a board makes the pick a confined one (`_confined`).
-CONFINED_M = 0.3
-#: What stands within this much (m) around an object's box, up to `RIM_ABOVE_M` over its top, is a
-#: rim the object is lifted over before it is carried (`_over_the_rim`): the drawer it stands in.
-RIM_M, RIM_ABOVE_M = 0.03, 0.08
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -117,7 +113,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
-    lift_m = max(lift_m, *(_over_the_rim(point, size, keep_off) for point in (top, *places)))
+    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off) for point in (top, *places)))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
     near = np.zeros((0, 3)) if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
@@ -130,7 +126,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     toward = _toward(base_pose, top)
     grasps = [*object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth),
               *side_grasps(size, top, base_pose)]
-    room = min(_headroom(point, size, keep_off, lift_m + LEANING_ROOM_M) for point in (top, *places))
+    room = min(headroom(point, size, keep_off, lift_m + LEANING_ROOM_M) for point in (top, *places))
 
     def clear_routes(choices: list[ObjectGrasp]) -> tuple[list[list[_Way]], list[tuple[_Route, bool]]]:
         ways_to = [_ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
@@ -226,7 +222,7 @@ def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class _Way:
     """One grasp of the object to one place: the grasp, the TCP at the grasp and at the release,
-    and whether a board stands close over either, lifted `lift_m` (`_confined`)."""
+    and whether a board stands close over either, lifted `lift_m` (`skills.arm.headroom.confined`)."""
 
     grasp_way: ObjectGrasp
     grasp: np.ndarray
@@ -244,7 +240,7 @@ def _ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: n
     for way in grasps:
         grasp = pose_at(way.rotation, top + way.offset - way.depth * UP)
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
-        here, there = (board or _confined(shifted(pose, lift_m * UP), keep_off)
+        here, there = (board or confined(shifted(pose, lift_m * UP), keep_off)
                        for board, pose in zip(boarded, (grasp, release), strict=True))
         ways.append((_touched(grasp, release, lift_m, keep_off), _Way(way, grasp, release, here, there)))
     return [entry for _, entry in sorted(ways, key=lambda pair: pair[0])]
@@ -320,12 +316,13 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
     In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
     before the pose above; carried straight across, or, after every straight route, round by the
     robot's side (`_detours`).
-    Where a board stands close over the object or its place (`_confined`: a box inside a cabinet)
-    a hand straight down has no room for its wrist: the top's near edge is grasped, the hand
-    leaning back towards the robot, the steepest first, or the side that faces the robot, the hand
-    level, first where the board leaves less than `LEANING_ROOM_M` over the lift (``room``: the
-    lowest board over the object's top or its place, `_headroom`); the object is lifted only as
-    high as clears what it covers first (`_lifts`); the hand comes in directly or from before the
+    Where a board stands close over the object or its place (`skills.arm.headroom.confined`: a
+    box inside a cabinet) a hand straight down has no room for its wrist: the top's near edge is
+    grasped, the hand leaning back towards the robot, the steepest first, or the side that faces
+    the robot, the hand level, first where the board leaves less than `LEANING_ROOM_M` over the
+    lift (``room``: the lowest board over the object's top or its place,
+    `skills.arm.headroom.headroom`); the object is lifted only as high as clears what it covers
+    first (`_lifts`); the hand comes in directly or from before the
     pose above it (onto a side: from before it, `_side_approaches`); and the object is drawn
     straight out of the storage before the carry, or brought straight into it after, by each of
     `BEFORE_M` (held by its side: square to that side)."""
@@ -350,10 +347,10 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
                 for out, inward in _detours(here, there):
                     routes.append(_Route(way, grasp, release, lift, tuple(approach), out * out_along,
                                          inward * in_along))
-    def confined(route: _Route) -> bool:  # open routes first, stable: else in the order built
+    def in_storage(route: _Route) -> bool:  # open routes first, stable: else in the order built
         return bool(np.any(route.out) or np.any(route.inward) or route.way.name in (EDGE, SIDE))
 
-    return sorted(routes, key=confined)[:CLEAR_ROUTES]
+    return sorted(routes, key=in_storage)[:CLEAR_ROUTES]
 
 
 def _detours(here: bool, there: bool) -> list[tuple[float, float]]:
@@ -370,9 +367,9 @@ def _detours(here: bool, there: bool) -> list[tuple[float, float]]:
 def _plain_routes(ways: list[_Way], lift_m: float, keep_off: np.ndarray | None) -> list[_Route]:
     """The routes as they were before clear chains were sought: every grasp, lifted `lift_m`, from
     high above where that is open, else directly; none where a board stands close over the grasp or
-    the release (`_confined`). There an unchecked route wrecks the storage: a box lifted unchecked
-    out of an open drawer pushed both of the chest's drawers 10 and 27 cm in past their end stops
-    (recursive 1018 of tuning-wide); a pick that fails there leaves the storage as it was."""
+    the release (`skills.arm.headroom.confined`). There an unchecked route wrecks the storage: a
+    box lifted unchecked out of an open drawer pushed both of the chest's drawers 10 and 27 cm in
+    past their end stops (recursive 1018 of tuning-wide); a pick that fails there leaves the storage as it was."""
     none = np.zeros(3)
     routes = []
     for entry in ways:
@@ -382,30 +379,6 @@ def _plain_routes(ways: list[_Way], lift_m: float, keep_off: np.ndarray | None) 
         for approach in _approaches(above, keep_off, none, before=False):
             routes.append(_Route(entry.grasp_way, entry.grasp, entry.release, lift_m, tuple(approach), none, none))
     return routes
-
-
-def _over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None) -> float:
-    """How high (m) the object, its top at ``top``, must be lifted for its bottom to clear, by
-    `LIFT_SPARE_M`, what stands around it (`RIM_M`, `RIM_ABOVE_M`): a box 14 cm tall in a
-    drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm over its top,
-    and carried back into it the same way (recursive 1050 of tuning-wide). 0 where nothing
-    stands around it."""
-    bottom = float(top[2] - size[2])
-    around = _column(keep_off, top, size[:2] / 2 + RIM_M, bottom + LIFT_SPARE_M, top[2] + RIM_ABOVE_M)
-    return float(around[:, 2].max() - bottom + LIFT_SPARE_M) if len(around) else 0.0
-
-
-def _column(keep_off: np.ndarray | None, top: np.ndarray, half: np.ndarray, low: float, high: float
-            ) -> np.ndarray:
-    """The points of ``keep_off`` within ``half`` (m, across x and y) of ``top`` and between the
-    heights ``low`` and ``high``: what stands around an object (`_over_the_rim`) or over it
-    (`under_a_board`)."""
-    if keep_off is None or not len(keep_off):
-        return np.zeros((0, 3))
-    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
-    inside = (np.all(np.abs(points[:, :2] - top[:2]) <= half, axis=1)
-              & (points[:, 2] > low) & (points[:, 2] < high))
-    return points[inside]
 
 
 def _lifts(lift_m: float, size: np.ndarray) -> list[float]:
@@ -432,13 +405,6 @@ def _approaches(above: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarr
     return approaches
 
 
-def _headroom(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, within: float) -> float:
-    """How far (m) over the object's top, its top at ``top``, the lowest thing over it stands;
-    inf where nothing does ``within`` that height."""
-    over = _column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + within)
-    return float(over[:, 2].min() - top[2]) if len(over) else np.inf
-
-
 def _side_approaches(grasp: np.ndarray) -> list[list[tuple[str, str, Any]]]:
     """Ways for a hand at an object's side to the pose before it (`APPROACH_M` back along its
     level axis): directly, and from as far again further back, straight in: through the opening
@@ -447,37 +413,6 @@ def _side_approaches(grasp: np.ndarray) -> list[list[tuple[str, str, Any]]]:
     return [[("before the object's side", "free", before)],
             [("well before the object's side", "free", grasp @ local_pose(z=-2 * APPROACH_M)),
              ("before the object's side", "line", before)]]
-
-
-def under_a_board(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, lift_m: float = LIFT_M) -> bool:
-    """Whether something stands over the object's own top, its top at ``top``, below where it is
-    lifted to and `CONFINED_M` over that: over its middle, not only over the hand (`_confined`).
-    A box held by its near edge in a drawer pulled out from under a closed one stood half under
-    that drawer, 10 cm from the hand, and a route taken unchecked lifted it into it (recursive 1039
-    of tuning-wide); a cabinet's board 12 cm over a box's top, lower than the lift, did not count
-    as over it, and a finger went up into the board (recursive 1043).
-
-    Args:
-        top: the middle of the object's top (world).
-        size: its box (dx, dy, dz).
-        keep_off: (N, 3) points of what stands near, or None.
-        lift_m: how high it is to be lifted.
-
-    Returns:
-        Whether three or more of ``keep_off`` stand over its footprint there.
-    """
-    return len(_column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + lift_m + CONFINED_M)) >= 3
-
-
-def _confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
-    """Whether something stands over ``pose`` within `CONFINED_M` (a cabinet's board over a box in
-    it): points of ``keep_off`` within 8 cm of it across, above it."""
-    if keep_off is None or not len(keep_off):
-        return False
-    points = np.asarray(keep_off, dtype=float)
-    across = np.linalg.norm(points[:, :2] - pose[:2, 3], axis=1) < 0.08
-    over = (points[:, 2] > pose[2, 3]) & (points[:, 2] < pose[2, 3] + CONFINED_M)
-    return int(np.count_nonzero(across & over)) >= 3
 
 
 def _open_above(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:

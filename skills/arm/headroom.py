@@ -1,0 +1,108 @@
+"""What stands over and around an object a pick lifts: the board of the cabinet it stands in,
+the rim of the drawer, and the room they leave (`skills.arm.pick_plans` chooses its grasps and
+routes by them; `skills.robot_picks` keeps a thing taken out from under a board out of its way
+out). Pure: plain point arrays (``keep_off``: what stands near, neither the object nor what it
+stands on), no world.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: How high above its grasp and its release a pick carries an object, unless told.
+LIFT_M = 0.15
+#: A lift clears what it must by this much (m): the object's own height, a rim.
+LIFT_SPARE_M = 0.015
+#: How far over the pose above an object (m) a board makes the pick a confined one (`confined`).
+CONFINED_M = 0.3
+#: What stands within this much (m) around an object's box, up to `RIM_ABOVE_M` over its top, is a
+#: rim the object is lifted over before it is carried (`over_the_rim`): the drawer it stands in.
+RIM_M, RIM_ABOVE_M = 0.03, 0.08
+
+
+def under_a_board(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, lift_m: float = LIFT_M) -> bool:
+    """Whether something stands over the object's own top, its top at ``top``, below where it is
+    lifted to and `CONFINED_M` over that: over its middle, not only over the hand (`confined`).
+    A box held by its near edge in a drawer pulled out from under a closed one stood half under
+    that drawer, 10 cm from the hand, and a route taken unchecked lifted it into it (recursive 1039
+    of tuning-wide); a cabinet's board 12 cm over a box's top, lower than the lift, did not count
+    as over it, and a finger went up into the board (recursive 1043).
+
+    Args:
+        top: the middle of the object's top (world).
+        size: its box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+        lift_m: how high it is to be lifted.
+
+    Returns:
+        Whether three or more of ``keep_off`` stand over its footprint there.
+    """
+    return len(_column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + lift_m + CONFINED_M)) >= 3
+
+
+def headroom(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, within: float) -> float:
+    """How far over the object's top the lowest thing over its footprint stands: how much room
+    a board leaves a hand or a lift there.
+
+    Args:
+        top: the middle of the object's top (world).
+        size: its box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+        within: how far over the top to look (m).
+
+    Returns:
+        The height (m) of the lowest such point over the top; inf where none stands within.
+    """
+    over = _column(keep_off, top, size[:2] / 2, top[2] + LIFT_SPARE_M, top[2] + within)
+    return float(over[:, 2].min() - top[2]) if len(over) else np.inf
+
+
+def over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None) -> float:
+    """How high (m) the object, its top at ``top``, must be lifted for its bottom to clear, by
+    `LIFT_SPARE_M`, what stands around it (`RIM_M`, `RIM_ABOVE_M`): a box 14 cm tall in a
+    drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm over its top,
+    and carried back into it the same way (recursive 1050 of tuning-wide).
+
+    Args:
+        top: the middle of the object's top (world).
+        size: its box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+
+    Returns:
+        The lift (m); 0 where nothing stands around it.
+    """
+    bottom = float(top[2] - size[2])
+    around = _column(keep_off, top, size[:2] / 2 + RIM_M, bottom + LIFT_SPARE_M, top[2] + RIM_ABOVE_M)
+    return float(around[:, 2].max() - bottom + LIFT_SPARE_M) if len(around) else 0.0
+
+
+def confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:
+    """Whether something stands over a hand's pose within `CONFINED_M` (a cabinet's board over a
+    box in it).
+
+    Args:
+        pose: the TCP's 4×4 world pose.
+        keep_off: (N, 3) points of what stands near, or None.
+
+    Returns:
+        Whether three or more of ``keep_off`` stand within 8 cm of it across, above it.
+    """
+    if keep_off is None or not len(keep_off):
+        return False
+    points = np.asarray(keep_off, dtype=float)
+    across = np.linalg.norm(points[:, :2] - pose[:2, 3], axis=1) < 0.08
+    over = (points[:, 2] > pose[2, 3]) & (points[:, 2] < pose[2, 3] + CONFINED_M)
+    return int(np.count_nonzero(across & over)) >= 3
+
+
+def _column(keep_off: np.ndarray | None, top: np.ndarray, half: np.ndarray, low: float, high: float
+            ) -> np.ndarray:
+    """The points of ``keep_off`` within ``half`` (m, across x and y) of ``top`` and between the
+    heights ``low`` and ``high``: what stands around an object (`over_the_rim`) or over it
+    (`under_a_board`)."""
+    if keep_off is None or not len(keep_off):
+        return np.zeros((0, 3))
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    inside = (np.all(np.abs(points[:, :2] - top[:2]) <= half, axis=1)
+              & (points[:, 2] > low) & (points[:, 2] < high))
+    return points[inside]
