@@ -263,7 +263,8 @@ class ArmSkill(PortedSkill):
     def _send_move(self, step: Step) -> PendingReply:
         assert step.samples is not None
         timeout = step.duration_s + COMMAND_SLACK_S
-        return self._ask("arm_trajectory", {"dt": step.dt, "stop_on_contact": step.stop_on_contact}, timeout,
+        meta = {"dt": step.dt, "stop_on_contact": step.stop_on_contact, "stop_on_new_contact": step.stop_on_new_contact}
+        return self._ask("arm_trajectory", meta, timeout,
                          arrays={"samples": np.ascontiguousarray(step.samples, dtype=np.float64)})
 
     def _ask(self, verb: str, meta: dict[str, Any], timeout_s: float | None = None,
@@ -344,7 +345,7 @@ class ArmSkill(PortedSkill):
             held = last.get("held")
             back = self._carry_back() if held is not None else None
             if back is not None:
-                self._phase, self._failure = "carry back", f"{reason} (carried back to where it was grasped)"
+                self._phase, self._failure = "carry back", reason
                 return self._send(lambda: self._send_move(back))
             return self._let_go(reason)
         return self._failed(reason)
@@ -363,7 +364,7 @@ class ArmSkill(PortedSkill):
             return None
         waypoints = planner.kin.clip(way_back(moves, self._last["q"]))
         return Step("move", "carry back to where it was grasped", planner.samples(waypoints, planner.careful_speed),
-                    planner.dt, waypoints, planner.careful_speed)
+                    planner.dt, waypoints, planner.careful_speed, stop_on_new_contact=True)
 
     def _let_go(self, reason: str) -> Status:
         """Open the gripper, then fail with ``reason`` (and what was let go of)."""
@@ -377,9 +378,14 @@ class ArmSkill(PortedSkill):
         return Status.RUNNING
 
     def _carried_back(self, message: Message) -> Status:
-        """The object is back where it was grasped (or as near as the move got): let go of it."""
+        """The object is back where it was grasped, or as near as the move got before it met
+        something it did not start against: let go of it there."""
         self._take_state(message)
-        return self._let_go(self._failure)
+        back = "to where it was grasped"
+        if self._last is not None and self._last["stopped_on_contact"]:
+            back = "until it met " + (", ".join(f"{thing_name(c)} ({c.get('robot_link')})"
+                                                for c in self._last["contacts"]) or "something")
+        return self._let_go(f"{self._failure} (carried back {back})")
 
     def _released(self, message: Message) -> Status:
         self._take_state(message)

@@ -3,11 +3,12 @@ the arm commands over real Zenoh, and the head camera and base left exactly as t
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 import pinocchio as pin
@@ -17,6 +18,7 @@ import zenoh
 
 from worlds.bus.keys import Keys
 from worlds.bus.rpc import QueryFailed, RequestError, call
+from worlds.arm import PUSHED_M
 from worlds.camera import Frame
 from worlds.commands import parse_arm_trajectory, parse_gripper, parse_observe
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig
@@ -317,11 +319,11 @@ def test_a_picked_object_moves_with_the_hand_and_stays_where_it_is_put_down() ->
         world.close()
 
 
-def test_a_carried_thing_meeting_a_closed_drawer_is_a_contact_that_stops_the_arm() -> None:
-    """The hand carries a can towards a chest's closed bottom drawer: the can meeting the drawer's
-    handle is reported as the carried thing's contact and stops the arm, where before the world
-    pushed the drawer on through its end stop (a box lifted in a chest's lower drawer pushed the
-    one above 55 cm into the chest, recursive 1039 of tuning-wide)."""
+@contextlib.contextmanager
+def _can_carried_into_a_drawer() -> Iterator[tuple[World, _IK, np.ndarray, Callable[[], float]]]:
+    """A world whose hand holds a can level with a chest's closed bottom drawer, in front of its
+    handle, with its IK, the samples of a move carrying it on into the handle (1 cm steps past it),
+    and how far the drawer stands open."""
     scene = tabletop_variant("drawer-only", 6)
     placement = next(pl for _, pl in scene.storage if pl.model.model == "drawer_chest")
     drawer = min(placement.model.parts, key=lambda part: part.name)  # the bottom one
@@ -341,11 +343,81 @@ def test_a_carried_thing_meeting_a_closed_drawer_is_a_contact_that_stops_the_arm
         q = _line(world, ik, q, [top + (level - top) * k / 4 + [0, 0, 0.03] for k in range(1, 5)], DOWN)
         path = [ik.solve(q, np.add(level, [0.0, 0.01 * k, 0.0]), DOWN) for k in range(1, int((handle[1] - top[1]) / 0.01) + 3)]
         samples = np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip([world.arm.positions(), *path], path)])
+        yield world, ik, samples, lambda: world.part_states()[placement.furniture_id][drawer.name]
+    finally:
+        ik.close()
+        world.close()
+
+
+def test_a_carried_thing_meeting_a_closed_drawer_is_a_contact_that_stops_the_arm() -> None:
+    """The hand carries a can towards a chest's closed bottom drawer: the can meeting the drawer's
+    handle is reported as the carried thing's contact and stops the arm, where before the world
+    pushed the drawer on through its end stop (a box lifted in a chest's lower drawer pushed the
+    one above 55 cm into the chest, recursive 1039 of tuning-wide)."""
+    with _can_carried_into_a_drawer() as (world, ik, samples, drawer):
+        shut = drawer()
         result = world.follow_trajectory(samples, 0.02, stop_on_contact=True)
         assert result.run.stopped_on_contact and result.run.samples_done < len(samples)
         assert {c["robot_link"] for c in result.contacts} == {"held object"}
         assert {c["category"] for c in result.contacts} <= {"drawer", "handle"}, result.contacts
-        assert world.part_states()[placement.furniture_id][drawer.name] >= drawer.lower - 0.005  # not pushed in
+        assert drawer() >= shut - 0.005  # not pushed in
+
+
+def test_a_move_that_stops_on_new_contacts_leaves_what_it_began_against_but_stops_pressing_on() -> None:
+    """Stopped against the drawer, the can carried on into it by a move that stops only on new
+    contacts stops within a few samples, the drawer not pushed in: pressed deeper, the contact it
+    began with counts. Carried straight back off the drawer, such a move runs to its end, where one
+    that stops on any contact does not leave the drawer (a box carried back from the drawer it met)."""
+    with _can_carried_into_a_drawer() as (world, ik, samples, drawer):
+        shut = drawer()
+        met = world.follow_trajectory(samples, 0.02, stop_on_contact=True)
+        assert met.run.stopped_on_contact
+        on = world.follow_trajectory(samples[met.run.samples_done:], 0.02, stop_on_new_contact=True)
+        assert on.run.stopped_on_contact and on.run.samples_done <= 3
+        assert drawer() >= shut - 0.005
+    with _can_carried_into_a_drawer() as (world, ik, samples, drawer):
+        shut = drawer()
+        world.follow_trajectory(samples, 0.02, stop_on_contact=True)
+
+        def back() -> np.ndarray:  # straight back towards the robot from where the can meets the drawer
+            here, tcp = world.arm.positions(), _tcp(world)
+            path = [here]
+            for k in range(1, 9):
+                path.append(ik.solve(path[-1], tcp - [0.0, 0.01 * k, 0.0], DOWN))
+            return np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip(path, path[1:])])
+
+        assert world.follow_trajectory(back(), 0.02, stop_on_contact=True).run.samples_done == 1
+        way = back()
+        away = world.follow_trajectory(way, 0.02, stop_on_new_contact=True)
+        assert not away.run.stopped_on_contact and away.run.samples_done == len(way)
+        assert drawer() >= shut - 0.005
+
+
+def test_a_part_pushed_by_a_touch_too_light_to_report_is_a_contact_that_stops_the_arm() -> None:
+    """Closed fingers moved level into the handle of a drawer standing open push it shut, and the
+    drawer slides away from them, so the touch stays shallower than a reported contact: before, the
+    move ran to its end, the drawer 4 cm further in and no contact reported. It stops once the
+    drawer has moved `worlds.arm.PUSHED_M`, reporting the touch."""
+    scene = tabletop_variant("drawer-only", 6)
+    placement = next(pl for _, pl in scene.storage if any(slot == "drawer_1/0" for _, slot in pl.contents))
+    world = World(CameraConfig())
+    stand = (placement.pose[0], -(scene.table_size[1] / 2 + ROBOT_RADIUS + 0.03), math.pi / 2)
+    ik = _IK(world.start_tabletop(scene, stand))
+    try:
+        world.set_part_state(placement.furniture_id, "drawer_1", 0.15)
+        piece = world.stage.built.storage[placement.furniture_id]
+        handle = np.array(p.getLinkState(piece.body, piece.links["drawer_1_handle"], physicsClientId=world.client)[4])
+        _go(world, READY)
+        assert world.gripper(close=True) is None
+        start = handle + [0.08, -0.1, 0.0]  # before the bar's end, level with it
+        q = ik.solve(AHEAD, start, FORWARD)
+        assert _go(world, q).contacts == []
+        path = [ik.solve(q, start + [0.0, 0.005 * k, 0.0], FORWARD) for k in range(1, 25)]
+        samples = np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip([world.arm.positions(), *path], path)])
+        result = world.follow_trajectory(samples, 0.04, stop_on_contact=True)
+        assert result.run.stopped_on_contact and result.run.samples_done < len(samples)
+        assert {c["category"] for c in result.contacts} <= {"drawer", "handle"} and result.contacts
+        assert world.part_states()[placement.furniture_id]["drawer_1"] == pytest.approx(0.15 - PUSHED_M, abs=0.005)
     finally:
         ik.close()
         world.close()
@@ -415,6 +487,10 @@ def test_contacts_are_reported_and_can_stop_the_motion() -> None:
         ({"dt": 0.0}, {"samples": np.zeros((2, 8))}, r"arm_trajectory\.dt: 0\.0 must be"),
         ({"dt": 0.02, "speed": 1}, {"samples": np.zeros((2, 8))}, r"arm_trajectory\.speed: unknown field"),
         ({"dt": 0.02, "stop_on_contact": "yes"}, {"samples": np.zeros((2, 8))}, r"arm_trajectory\.stop_on_contact"),
+        ({"dt": 0.02, "stop_on_new_contact": 1}, {"samples": np.zeros((2, 8))},
+         r"arm_trajectory\.stop_on_new_contact: expected true or false, got 1"),
+        ({"dt": 0.02, "stop_on_contact": True, "stop_on_new_contact": True}, {"samples": np.zeros((2, 8))},
+         r"arm_trajectory\.stop_on_new_contact: true together with stop_on_contact; at most one may be"),
         ({"dt": 0.02}, {}, r"arm_trajectory\.samples: missing"),
         ({"dt": 0.02}, {"samples": np.zeros((2, 8)), "extra": np.zeros(2)}, r"arm_trajectory\.arrays\.extra"),
         ({"dt": 0.02}, {"samples": np.zeros((2, 7))}, r"arm_trajectory\.samples: shape \[2, 7\] is not \(N, 8\)"),

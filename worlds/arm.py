@@ -40,6 +40,12 @@ FINGER_TIMEOUT_S = 1.0
 CONTACT_DEPTH = -1e-3
 #: The robot link a carried thing's contacts are reported as (`Arm.touches`).
 HELD_LINK = "held object"
+#: How much deeper (m) than when a move began a contact it began with must press to stop a move
+#: that stops only on new contacts (`Arm.follow`'s ``stop_on_new_contact``).
+PRESSED_DEEPER_M = 2e-3
+#: How far (m) a link of a piece of furniture (a drawer, a door, a handle) may move after the arm
+#: or what it carries first touched it before that counts as a contact however light the touch.
+PUSHED_M = 0.01
 
 Pose = np.ndarray  # 4x4
 OnStep = Callable[[], None]
@@ -83,6 +89,11 @@ class Touch:
     body: int
     link: int
     depth: float
+
+    @property
+    def between(self) -> tuple[str, int, int]:
+        """What the contact is between: the robot's link, the other body and its link."""
+        return self.robot_link, self.body, self.link
 
 
 @dataclass(frozen=True)
@@ -210,13 +221,22 @@ class Arm:
         on_step()
 
     def follow(self, samples: np.ndarray, dt: float, on_step: OnStep, stop_on_contact: bool,
-               ignore: Callable[[int, int], bool]) -> TrajectoryRun:
+               ignore: Callable[[int, int], bool], stop_on_new_contact: bool = False) -> TrajectoryRun:
         """Track ``samples`` (N, joints), one every ``dt`` seconds, from where the arm is.
 
         Targets move linearly from one sample to the next over the sample's physics steps, with the
         matching target velocity. After each sample the robot's contacts (base link excepted, and
         those ``ignore(body, link)`` accepts) are collected; with ``stop_on_contact`` the arm stops
-        at the first and holds where it is.
+        at the first and holds where it is. A link of furniture the arm touched, however lightly,
+        and that has since moved `PUSHED_M` counts as a contact too (`_pushed`): a drawer slides
+        away from what pushes it, so the touch stays shallow, and closed fingers pushed an open
+        drawer 4 cm in with no contact reported. With ``stop_on_new_contact`` the arm stops at the
+        first contact with something it was not touching, however lightly, when the move began, or
+        at one it began with pressed `PRESSED_DEEPER_M` deeper, and not on parts pushed: a box
+        carried back from the drawer it met starts against that drawer and would stop at once on
+        any contact, and a hand held back against a chest's front dragged a drawer 2 cm open on
+        its way back, where stopping would have left the box it carried in the air before the chest.
+        What is pushed is reported all the same.
 
         Args:
             samples: the joint positions to track.
@@ -224,6 +244,7 @@ class Arm:
             on_step: called after every physics step.
             stop_on_contact: whether to stop at the first contact.
             ignore: which contacts (body, link) do not count.
+            stop_on_new_contact: whether to stop at the first contact not there when the move began.
 
         Returns:
             How the trajectory went.
@@ -233,6 +254,12 @@ class Arm:
         previous = self._targets.copy()
         worst, done, stopped = 0.0, 0, False
         touches: dict[tuple[str, int, int], Touch] = {}
+        began: dict[tuple[str, int, int], float] = {}
+        for touch in self.touches(deeper_than=0.0):
+            if not ignore(touch.body, touch.link):
+                began[touch.between] = min(began.get(touch.between, 0.0), touch.depth)
+        began_on = {(body, link) for _, body, link in began}
+        touched: dict[tuple[int, int], tuple[str, np.ndarray]] = {}  # furniture link -> who touched it, where it was
         try:
             for sample in samples:
                 velocity = (sample - previous) / dt
@@ -243,12 +270,16 @@ class Arm:
                 self._targets = sample.copy()
                 done += 1
                 worst = max(worst, float(np.abs(self.positions() - sample).max()))
-                new = [t for t in self.touches() if not ignore(t.body, t.link)]
+                light = [t for t in self.touches(deeper_than=0.0) if not ignore(t.body, t.link)]
+                deep = [t for t in light if t.depth <= CONTACT_DEPTH]
+                new = deep + self._pushed(touched, light)
                 for touch in new:
-                    key = (touch.robot_link, touch.body, touch.link)
+                    key = touch.between
                     if key not in touches or touch.depth < touches[key].depth:
                         touches[key] = touch
-                if new and stop_on_contact:
+                fresh = [t for t in deep if (t.body, t.link) not in began_on
+                         or t.depth < began.get(t.between, 0.0) - PRESSED_DEEPER_M]
+                if (new and stop_on_contact) or (fresh and stop_on_new_contact):
                     stopped = True
                     self._targets = self.positions()
                     self._drive(self._targets, np.zeros(len(self.joints)))
@@ -261,14 +292,33 @@ class Arm:
         final = float(np.abs(positions - self._targets).max())
         return TrajectoryRun(positions, worst, final, done, stopped, list(touches.values()))
 
-    def touches(self) -> list[Touch]:
-        """Contacts deeper than `CONTACT_DEPTH` in the last step of the robot's links (all but the
-        base) and of what the hand carries, the latter as `HELD_LINK`'s.
+    def _pushed(self, touched: dict[tuple[int, int], tuple[str, np.ndarray]], light: list[Touch]) -> list[Touch]:
+        """The links of furniture (a body's links, not its base) that the arm or what it carries
+        has touched so far in this move, however lightly (kept in ``touched``: link -> the robot
+        link that touched it first and where the link stood then; ``light`` adds this step's
+        touches), that have since moved `PUSHED_M`: as touches of depth 0."""
+        for touch in light:
+            if touch.link >= 0 and (touch.body, touch.link) not in touched:
+                touched[(touch.body, touch.link)] = touch.robot_link, self._link_position(touch.body, touch.link)
+        return [Touch(robot_link, body, link, 0.0) for (body, link), (robot_link, where) in touched.items()
+                if float(np.linalg.norm(self._link_position(body, link) - where)) > PUSHED_M]
+
+    def _link_position(self, body: int, link: int) -> np.ndarray:
+        """Where the centre of mass of ``body``'s ``link`` stands (world)."""
+        return np.asarray(p.getLinkState(body, link, physicsClientId=self.client)[0], dtype=float)
+
+    def touches(self, deeper_than: float = CONTACT_DEPTH) -> list[Touch]:
+        """Contacts deeper than ``deeper_than`` (by default `CONTACT_DEPTH`; 0 for every touch) in
+        the last step of the robot's links (all but the base) and of what the hand carries, the
+        latter as `HELD_LINK`'s.
 
         A carried thing is put back in the hand after every step, whatever it meets: pressed into
         a drawer or a door it would push the part on through its end stop (a box lifted inside a
         chest's lower drawer pushed the closed drawer above 55 cm into the chest, recursive 1039 of
         tuning-wide) where a real arm would feel the thing it carries meet the part.
+
+        Args:
+            deeper_than: the depth (m, negative: penetration) a contact must reach.
 
         Returns:
             The contacts.
@@ -278,11 +328,11 @@ class Arm:
             link, other = point[3], point[2]
             if other == self.body or link < 0:
                 continue
-            if point[8] <= CONTACT_DEPTH:
+            if point[8] <= deeper_than:
                 found.append(Touch(self.link_names[link], other, point[4], float(point[8])))
         if self._carry is not None and self.grip is not None:
             for point in p.getContactPoints(bodyA=self.grip.body, physicsClientId=self.client):
-                if point[2] != self.body and point[8] <= CONTACT_DEPTH:
+                if point[2] != self.body and point[8] <= deeper_than:
                     found.append(Touch(HELD_LINK, point[2], point[4], float(point[8])))
         return found
 

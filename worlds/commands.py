@@ -335,10 +335,13 @@ class TrajectoryRequest:
     samples: np.ndarray
     dt: float
     stop_on_contact: bool
+    stop_on_new_contact: bool = False
 
 
 def parse_arm_trajectory(meta: dict[str, Any], arrays: dict[str, np.ndarray], arm: ArmSpec) -> TrajectoryRequest:
-    """From ``{"dt": seconds, "stop_on_contact": optional bool}`` and the float array ``samples`` (N, joints).
+    """From ``{"dt": seconds, "stop_on_contact": optional bool, "stop_on_new_contact": optional bool}``
+    and the float array ``samples`` (N, joints). At most one of the two may be true: the first stops
+    the motion on any contact, the second only on one the arm did not begin it with.
 
     Every sample must be finite and within the joints' position limits, and no joint may move faster
     than its velocity limit between consecutive samples. Where the first sample may start is the
@@ -356,16 +359,21 @@ def parse_arm_trajectory(meta: dict[str, Any], arrays: dict[str, np.ndarray], ar
         RequestError: naming the field or sample that is wrong.
     """
     where = "arm_trajectory"
-    _only(meta, where, ("dt", "stop_on_contact"))
+    _only(meta, where, ("dt", "stop_on_contact", "stop_on_new_contact"))
     check_arrays(where, arrays)
     dt = meta.get("dt")
     if dt is None:
         raise RequestError(f"{where}.dt: missing (the sampling period in seconds is required)")
     if not _is_number(dt) or not DT_RANGE[0] <= dt <= DT_RANGE[1]:
         raise RequestError(f"{where}.dt: {_show(dt)} must be a number of seconds in [{DT_RANGE[0]:g}, {DT_RANGE[1]:g}]")
-    stop = meta.get("stop_on_contact", False)
-    if not isinstance(stop, bool):
-        raise RequestError(f"{where}.stop_on_contact: expected true or false, got {_show(stop)}")
+    stops = {}
+    for field in ("stop_on_contact", "stop_on_new_contact"):
+        stops[field] = meta.get(field, False)
+        if not isinstance(stops[field], bool):
+            raise RequestError(f"{where}.{field}: expected true or false, got {_show(stops[field])}")
+    if all(stops.values()):
+        raise RequestError(f"{where}.stop_on_new_contact: true together with stop_on_contact; at most one may be "
+                           f"(stop on any contact, or only on one the arm did not begin the motion with)")
     if "samples" not in arrays:
         raise RequestError(f"{where}.samples: missing (a float array of shape (N, {len(arm.joints)}) is required)")
     samples = arrays["samples"]
@@ -396,4 +404,4 @@ def parse_arm_trajectory(meta: dict[str, Any], arrays: dict[str, np.ndarray], ar
         row, column = bad[0]
         raise RequestError(f"{where}.samples[{row + 1}][{column}]: moves {step[row, column]:.4f} in {dt:g} s, faster "
                            f"than {arm.names[column]}'s {arm.joints[column].velocity:g} per second")
-    return TrajectoryRequest(samples, float(dt), stop)
+    return TrajectoryRequest(samples, float(dt), stops["stop_on_contact"], stops["stop_on_new_contact"])

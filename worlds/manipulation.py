@@ -72,14 +72,15 @@ def arm_state(stage: Stage, body: RobotBody) -> ArmState:
 
 
 def follow_trajectory(stage: Stage, body: RobotBody, samples: np.ndarray, dt: float,
-                      stop_on_contact: bool = False) -> TrajectoryResult:
+                      stop_on_contact: bool = False, stop_on_new_contact: bool = False) -> TrajectoryResult:
     """Run the lift and arm through ``samples``, one every ``dt`` seconds.
 
     ``samples`` must already lie within the joint limits (the command parser checks that); here
     the first sample must start where the arm is, within one sample's travel at full speed plus
     `START_TOLERANCE`. Contacts of the arm and of what it carries (`worlds.arm.Arm.touches`) with
     anything but floors, the held thing and the part whose handle is held are reported, and with
-    ``stop_on_contact`` end the motion early.
+    ``stop_on_contact`` end the motion early; with ``stop_on_new_contact`` only those the arm did
+    not begin the motion with do (`worlds.arm.Arm.follow`).
 
     Args:
         stage: the built scene.
@@ -87,6 +88,7 @@ def follow_trajectory(stage: Stage, body: RobotBody, samples: np.ndarray, dt: fl
         samples: (N, 8) joint positions in `worlds.robot_arm.arm_spec` order.
         dt: the time between samples (s).
         stop_on_contact: whether a contact ends the motion.
+        stop_on_new_contact: whether a contact not there when the motion began ends it.
 
     Returns:
         How the run went and what the arm touched.
@@ -105,7 +107,7 @@ def follow_trajectory(stage: Stage, body: RobotBody, samples: np.ndarray, dt: fl
     grip = arm.grip
     held = set() if grip is None else {(grip.body, link) for link in grip.links}
     run = arm.follow(samples, dt, stage.riders.sync, stop_on_contact,
-                     lambda other, link: (other, link) in held or other in stage.floors)
+                     lambda other, link: (other, link) in held or other in stage.floors, stop_on_new_contact)
     contacts = [{**stage.label_of(t.body, t.link), "robot_link": t.robot_link, "depth": t.depth}
                 for t in run.touches]
     return TrajectoryResult(run, contacts)

@@ -8,7 +8,8 @@ Queryables (all under ``<ns>``, see `worlds.bus.keys`):
                            uint8), depth (H,W float32 metres, 0 = no return), seg (H,W int32 ids, -1 = nothing)
 - ``world/cmd/move_base``  {"path": [[x, y], ...], "yaw": optional} -> pose, reached, contact, the route driven
 - ``world/cmd/arm_state``  {} -> joint positions, TCP pose, gripper width, what it holds
-- ``world/cmd/arm_trajectory`` {"dt", "stop_on_contact"} + array samples (N, 8) -> reached, errors, contacts
+- ``world/cmd/arm_trajectory`` {"dt", "stop_on_contact", "stop_on_new_contact"} + array samples (N, 8)
+  -> reached, errors, contacts
 - ``world/cmd/gripper``    {"action": "open" | "close"} -> what it holds
 - ``world/cmd/episode_report`` {} -> the evaluator's record of the episode since the last home reset
                            (`worlds.evaluation`): for the runtime once the tree is done, never for behaviours
@@ -235,7 +236,8 @@ class WorldServer:
         wanted = commands.parse_arm_trajectory(request.meta, request.arrays, arm_spec())
         world = self._built("arm_trajectory")
         try:
-            result = world.follow_trajectory(wanted.samples, wanted.dt, wanted.stop_on_contact)
+            result = world.follow_trajectory(wanted.samples, wanted.dt, wanted.stop_on_contact,
+                                             wanted.stop_on_new_contact)
         except ValueError as error:  # the first sample is not where the arm is
             raise RequestError(f"arm_trajectory.{error}") from None
         run = result.run

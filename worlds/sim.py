@@ -240,18 +240,20 @@ class World:
         """
         return manipulation.arm_state(self.stage, self.body)
 
-    def follow_trajectory(self, samples: np.ndarray, dt: float, stop_on_contact: bool = False) -> TrajectoryResult:
+    def follow_trajectory(self, samples: np.ndarray, dt: float, stop_on_contact: bool = False,
+                          stop_on_new_contact: bool = False) -> TrajectoryResult:
         """Run the arm through ``samples`` (`worlds.manipulation.follow_trajectory`).
 
         Args:
             samples: (N, 8) joint positions.
             dt: seconds between samples.
             stop_on_contact: whether a contact ends the motion.
+            stop_on_new_contact: whether a contact not there when the motion began ends it.
 
         Returns:
             How it went.
         """
-        return manipulation.follow_trajectory(self.stage, self.body, samples, dt, stop_on_contact)
+        return manipulation.follow_trajectory(self.stage, self.body, samples, dt, stop_on_contact, stop_on_new_contact)
 
     def gripper(self, close: bool) -> Label | None:
         """Close or open the gripper (`worlds.manipulation.gripper`).

@@ -137,6 +137,8 @@ class Step:
         touch: "handle" or "object" when the move is a touch grasp's approach, which arrives when
             it stops on touching that; "support" when it lowers what the hand carries, which
             arrives where that is held back by what it is put on (the arm touching nothing).
+        stop_on_new_contact: the move stops on the first contact it did not begin with (a carry
+            back from the thing it met on its way).
     """
 
     kind: str
@@ -151,6 +153,7 @@ class Step:
     action: str | None = None
     expect_held: str | None = None
     touch: str | None = None
+    stop_on_new_contact: bool = False
 
     @property
     def duration_s(self) -> float:
