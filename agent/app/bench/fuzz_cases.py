@@ -164,6 +164,7 @@ class Catalogue:
             ("move_base", {"path": [[1.0, 1.0]], "yaw": _BIG}, [99.0, 1e308, 2**63]),
             ("arm_trajectory", {"dt": _BIG}, [0, -1, 2.0, 1e308, 2**63, 1e-320]),
             ("arm_trajectory", {"dt": 0.02, "stop_on_contact": _BIG}, [1, 0, "yes"]),
+            ("arm_trajectory", {"dt": 0.02, "stop_on_new_contact": _BIG}, [1, 0, "yes"]),
             ("gripper", {"action": _BIG}, ["squeeze", None]),
         ])
         odd = self._rng.choice([*extra, "", "north", "x" * 10_000, [], {}, [1], {"a": {"b": {"c": 1}}}, _BIG])
