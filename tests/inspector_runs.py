@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,9 @@ from py_trees.common import Access, Status
 from worlds.bus.session import free_tcp_endpoint, open_session
 from agent.app.runtime.episode import EpisodeOutcome, EpisodeRunner
 from agent.app.runtime.record import SnapshotLog
+
+#: How long (s) a live run waits for something to listen to its snapshots before it ticks anyway.
+MATCH_WAIT_S = 20.0
 
 
 class Count(py_trees.behaviour.Behaviour):
@@ -69,7 +73,8 @@ def record_run(folder: Path, ticks: int = 6) -> EpisodeOutcome:
 
 
 def live_run(session: Any, key: str, ticks: int, period_s: float) -> threading.Thread:
-    """Tick the tree in a thread, publishing its snapshots on ``key``.
+    """Tick the tree in a thread, publishing its snapshots on ``key`` once something listens there
+    (or `MATCH_WAIT_S` have passed).
 
     Args:
         session: the bus session.
@@ -84,6 +89,11 @@ def live_run(session: Any, key: str, ticks: int, period_s: float) -> threading.T
 
     def run() -> None:
         try:
+            # what listens may not have been matched yet: on two busy cores the ticks were over
+            # before it heard any (the live test saw no state within 20 s)
+            deadline = time.monotonic() + MATCH_WAIT_S
+            while not publisher.matching_status.matching and time.monotonic() < deadline:
+                time.sleep(0.01)
             EpisodeRunner(tree(ticks), "live-run", [lambda data: publisher.put(json.dumps(data))], 60.0,
                           tick_period_s=period_s, max_wait_s=period_s).run()
         finally:
