@@ -18,7 +18,6 @@ import zenoh
 
 from worlds.bus.keys import Keys
 from worlds.bus.rpc import QueryFailed, RequestError, call
-from worlds.arm import PUSHED_M
 from worlds.camera import Frame
 from worlds.commands import parse_arm_trajectory, parse_gripper, parse_observe
 from worlds.robot import ROBOT_HEIGHT, ROBOT_RADIUS, CameraConfig
@@ -391,36 +390,6 @@ def test_a_move_that_stops_on_new_contacts_leaves_what_it_began_against_but_stop
         away = world.follow_trajectory(way, 0.02, stop_on_new_contact=True)
         assert not away.run.stopped_on_contact and away.run.samples_done == len(way)
         assert drawer() >= shut - 0.005
-
-
-def test_a_part_pushed_by_a_touch_too_light_to_report_is_a_contact_that_stops_the_arm() -> None:
-    """Closed fingers moved level into the handle of a drawer standing open push it shut, and the
-    drawer slides away from them, so the touch stays shallower than a reported contact: before, the
-    move ran to its end, the drawer 4 cm further in and no contact reported. It stops once the
-    drawer has moved `worlds.arm.PUSHED_M`, reporting the touch."""
-    scene = tabletop_variant("drawer-only", 6)
-    placement = next(pl for _, pl in scene.storage if any(slot == "drawer_1/0" for _, slot in pl.contents))
-    world = World(CameraConfig())
-    stand = (placement.pose[0], -(scene.table_size[1] / 2 + ROBOT_RADIUS + 0.03), math.pi / 2)
-    ik = _IK(world.start_tabletop(scene, stand))
-    try:
-        world.set_part_state(placement.furniture_id, "drawer_1", 0.15)
-        piece = world.stage.built.storage[placement.furniture_id]
-        handle = np.array(p.getLinkState(piece.body, piece.links["drawer_1_handle"], physicsClientId=world.client)[4])
-        _go(world, READY)
-        assert world.gripper(close=True) is None
-        start = handle + [0.08, -0.1, 0.0]  # before the bar's end, level with it
-        q = ik.solve(AHEAD, start, FORWARD)
-        assert _go(world, q).contacts == []
-        path = [ik.solve(q, start + [0.0, 0.005 * k, 0.0], FORWARD) for k in range(1, 25)]
-        samples = np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip([world.arm.positions(), *path], path)])
-        result = world.follow_trajectory(samples, 0.04, stop_on_contact=True)
-        assert result.run.stopped_on_contact and result.run.samples_done < len(samples)
-        assert {c["category"] for c in result.contacts} <= {"drawer", "handle"} and result.contacts
-        assert world.part_states()[placement.furniture_id]["drawer_1"] == pytest.approx(0.15 - PUSHED_M, abs=0.005)
-    finally:
-        ik.close()
-        world.close()
 
 
 def test_an_open_bottomed_box_put_back_over_what_it_covered_stands_on_its_walls() -> None:

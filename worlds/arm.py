@@ -43,9 +43,6 @@ HELD_LINK = "held object"
 #: How much deeper (m) than when a move began a contact it began with must press to stop a move
 #: that stops only on new contacts (`Arm.follow`'s ``stop_on_new_contact``).
 PRESSED_DEEPER_M = 2e-3
-#: How far (m) a link of a piece of furniture (a drawer, a door, a handle) may move after the arm
-#: or what it carries first touched it before that counts as a contact however light the touch.
-PUSHED_M = 0.01
 
 Pose = np.ndarray  # 4x4
 OnStep = Callable[[], None]
@@ -227,16 +224,10 @@ class Arm:
         Targets move linearly from one sample to the next over the sample's physics steps, with the
         matching target velocity. After each sample the robot's contacts (base link excepted, and
         those ``ignore(body, link)`` accepts) are collected; with ``stop_on_contact`` the arm stops
-        at the first and holds where it is. A link of furniture the arm touched, however lightly,
-        and that has since moved `PUSHED_M` counts as a contact too (`_pushed`): a drawer slides
-        away from what pushes it, so the touch stays shallow, and closed fingers pushed an open
-        drawer 4 cm in with no contact reported. With ``stop_on_new_contact`` the arm stops at the
-        first contact with something it was not touching, however lightly, when the move began, or
-        at one it began with pressed `PRESSED_DEEPER_M` deeper, and not on parts pushed: a box
-        carried back from the drawer it met starts against that drawer and would stop at once on
-        any contact, and a hand held back against a chest's front dragged a drawer 2 cm open on
-        its way back, where stopping would have left the box it carried in the air before the chest.
-        What is pushed is reported all the same.
+        at the first and holds where it is. With ``stop_on_new_contact`` it stops at the first
+        contact with something it was not touching, however lightly, when the move began, or at one
+        it began with pressed `PRESSED_DEEPER_M` deeper: a box carried back from the drawer it met
+        starts against that drawer, and would stop at once on any contact.
 
         Args:
             samples: the joint positions to track.
@@ -259,7 +250,6 @@ class Arm:
             if not ignore(touch.body, touch.link):
                 began[touch.between] = min(began.get(touch.between, 0.0), touch.depth)
         began_on = {(body, link) for _, body, link in began}
-        touched: dict[tuple[int, int], tuple[str, np.ndarray]] = {}  # furniture link -> who touched it, where it was
         try:
             for sample in samples:
                 velocity = (sample - previous) / dt
@@ -270,14 +260,12 @@ class Arm:
                 self._targets = sample.copy()
                 done += 1
                 worst = max(worst, float(np.abs(self.positions() - sample).max()))
-                light = [t for t in self.touches(deeper_than=0.0) if not ignore(t.body, t.link)]
-                deep = [t for t in light if t.depth <= CONTACT_DEPTH]
-                new = deep + self._pushed(touched, light)
+                new = [t for t in self.touches() if not ignore(t.body, t.link)]
                 for touch in new:
                     key = touch.between
                     if key not in touches or touch.depth < touches[key].depth:
                         touches[key] = touch
-                fresh = [t for t in deep if (t.body, t.link) not in began_on
+                fresh = [t for t in new if (t.body, t.link) not in began_on
                          or t.depth < began.get(t.between, 0.0) - PRESSED_DEEPER_M]
                 if (new and stop_on_contact) or (fresh and stop_on_new_contact):
                     stopped = True
@@ -291,21 +279,6 @@ class Arm:
         positions = self.positions()
         final = float(np.abs(positions - self._targets).max())
         return TrajectoryRun(positions, worst, final, done, stopped, list(touches.values()))
-
-    def _pushed(self, touched: dict[tuple[int, int], tuple[str, np.ndarray]], light: list[Touch]) -> list[Touch]:
-        """The links of furniture (a body's links, not its base) that the arm or what it carries
-        has touched so far in this move, however lightly (kept in ``touched``: link -> the robot
-        link that touched it first and where the link stood then; ``light`` adds this step's
-        touches), that have since moved `PUSHED_M`: as touches of depth 0."""
-        for touch in light:
-            if touch.link >= 0 and (touch.body, touch.link) not in touched:
-                touched[(touch.body, touch.link)] = touch.robot_link, self._link_position(touch.body, touch.link)
-        return [Touch(robot_link, body, link, 0.0) for (body, link), (robot_link, where) in touched.items()
-                if float(np.linalg.norm(self._link_position(body, link) - where)) > PUSHED_M]
-
-    def _link_position(self, body: int, link: int) -> np.ndarray:
-        """Where the centre of mass of ``body``'s ``link`` stands (world)."""
-        return np.asarray(p.getLinkState(body, link, physicsClientId=self.client)[0], dtype=float)
 
     def touches(self, deeper_than: float = CONTACT_DEPTH) -> list[Touch]:
         """Contacts deeper than ``deeper_than`` (by default `CONTACT_DEPTH`; 0 for every touch) in
