@@ -14,6 +14,7 @@ found there lay inside it (the Matryoshka's smaller doll).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -44,9 +45,11 @@ COVERED_M = 0.005
 #: Idle spots offered to a pick away, nearest first, and how far apart they lie at least (m): where
 #: the way to the nearest is blocked (a door standing open across it), the next may be clear.
 PLACES, PLACES_APART_M = 3, 0.15
-#: How far from the base's axis (m) a thing is picked and put down: the arm reaches a table's top
-#: from above up to ~0.85 m out, and a carry planned further fails at planning. The base slides
-#: along the table's edge to a stand from which both lie within this.
+#: How far from the base's axis (m) the arm reaches a table's top from above at all.
+ARM_REACH_M = 0.85
+#: How far from the base's axis (m) a thing is picked and put down: a carry planned out near
+#: `ARM_REACH_M` fails at planning. The base slides along the table's edge to a stand from which
+#: both lie within this.
 PLACE_REACH_M = 0.8
 #: How high (m) over the surface the lane a thing came out of storage along stands for
 #: `idle_spot` (`way_out`): above its top, where the points of things count.
@@ -150,7 +153,8 @@ class Picks:
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
                           surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=keep_off)
         if not result.ok:
-            return SkillResult(False, result.reason)
+            planning = ": plan: " in result.reason
+            return SkillResult(False, result.reason + (beyond_reach(top, (stand_x, edge_y)) if planning else ""))
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
@@ -285,6 +289,25 @@ class Picks:
                 continue
             faces.append(closed_drawer_faces(front, memory.get(drawer.parent).points(), self.body.eye))
         return faces
+
+
+def beyond_reach(point: np.ndarray, stand_xy: tuple[float, float], reach_m: float = ARM_REACH_M) -> str:
+    """What to add to the reason a pick could not be planned when its object stands further from
+    the base's axis than the arm reaches over a table: the nests of boxes in storage at a table's
+    back edge stand 0.85–1.2 m out, and "no route" alone sent the search to the routes.
+
+    Args:
+        point: the object's grasp point (world; its x, y count).
+        stand_xy: where the base's axis stands (world x, y).
+        reach_m: how far the arm reaches over a table from the base's axis.
+
+    Returns:
+        " (… m from the base's axis, beyond the arm's reach over a table, … m)", or "" within it.
+    """
+    out = math.dist((float(point[0]), float(point[1])), stand_xy)
+    if out <= reach_m:
+        return ""
+    return f" ({out:.2f} m from the base's axis, beyond the arm's reach over a table, {reach_m:.2f} m)"
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

@@ -6,10 +6,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from agent.app.eval.failure_causes import NOT_RECOVERED, OTHER, PERCEPTION, action_cause, cause_table
 from agent.app.eval.interactive import COLUMNS, evaluate_interactive, split_seeds
+from skills.robot_picks import beyond_reach
 from worlds.tabletop import tabletop_variant
 from worlds.tabletop_splits import SPLITS
 
@@ -83,6 +85,9 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
     ("idle spot: no free place 0.28 m across on the surface at 0.750 m", "no idle space"),
     ("pick: no route clear of what stands near, and none is taken unchecked under a board close over the "
      "object or its place", "no clear route in storage"),
+    ("pick_away: plan: pick: no route clear of what stands near, and none is taken unchecked under a board "
+     "close over the object or its place" + beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)),
+     "beyond the arm's reach"),
     ("the base could not reach (0.12, -0.80, 90°): it touched door", "base unreachable"),
     ("door 7 has no handle the robot has seen", "no handle points"),
     ("the gripper closed on nothing (0 mm between the fingers)", "grasp closed on nothing"),
@@ -91,6 +96,14 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
 ])
 def test_a_failed_action_is_put_in_its_cause(reason: str, cause: str) -> None:
     assert action_cause(f"pick_away cup (o12) FAILED: {reason}") == ("pick_away", cause)
+
+
+def test_a_pick_beyond_the_arms_reach_says_how_far_out_its_object_stands() -> None:
+    assert beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)) == (
+        " (0.97 m from the base's axis, beyond the arm's reach over a table, 0.85 m)")
+    assert beyond_reach(np.array([0.5, 0.05, 0.9]), (0.1, -0.72)) == (
+        " (0.87 m from the base's axis, beyond the arm's reach over a table, 0.85 m)")  # aside as well as out
+    assert beyond_reach(np.array([0.1, 0.1, 0.9]), (0.1, -0.72)) == ""  # 0.82 m: within it
 
 
 def test_the_cause_table_counts_actions_and_failed_scenes() -> None:

@@ -18,6 +18,7 @@ from typing import Any
 #: (cause, words any of which in a failed action's reason puts it there), tried in order: the
 #: first that matches wins, so the narrower wording comes before the wider.
 ACTION_CAUSES = (
+    ("beyond the arm's reach", ("beyond the arm's reach",)),
     ("light touch", ("too light for the world to report",)),
     ("base unreachable", ("the base could not reach",)),
     ("contact stop", ("stopped on contact",)),
