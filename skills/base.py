@@ -55,7 +55,7 @@ from skills.arm.retrace import way_back
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
 from skills.context import SkillContext
 from skills.ports import Port, PortedSkill, input_port, output_port
-from skills.replies import arm_state, step_problem, thing_name
+from skills.replies import arm_state, step_problem, thing_name, touched_names
 from agent.pose import Pose2D
 
 log = logging.getLogger(__name__)
@@ -383,8 +383,7 @@ class ArmSkill(PortedSkill):
         self._take_state(message)
         back = "to where it was grasped"
         if self._last is not None and self._last["stopped_on_contact"]:
-            back = "until it met " + (", ".join(f"{thing_name(c)} ({c.get('robot_link')})"
-                                                for c in self._last["contacts"]) or "something")
+            back = f"until it met {touched_names(self._last['contacts'])}"
         return self._let_go(f"{self._failure} (carried back {back})")
 
     def _released(self, message: Message) -> Status:

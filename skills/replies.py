@@ -84,6 +84,18 @@ def thing_name(label: dict[str, Any]) -> str:
     return f"{label.get('category', 'something')} {label.get('id', '')}".strip()
 
 
+def touched_names(contacts: list[dict[str, Any]]) -> str:
+    """What a move touched, in words: each thing with the robot link that touched it.
+
+    Args:
+        contacts: the contacts of an arm_trajectory reply.
+
+    Returns:
+        "drawer 12 (held object), handle 9 (panda_hand)", or "something" for none.
+    """
+    return ", ".join(f"{thing_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
+
+
 def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | None) -> tuple[str, float | None]:
     """Why the world's reply to ``step`` means the skill failed, and how far a part it moved stands.
 
@@ -105,8 +117,7 @@ def step_problem(step: Step, state: dict[str, Any], previous: dict[str, Any] | N
     if step.touch and stopped and carrying and all(_EXPECTED[step.touch][0](c) for c in contacts):
         return "", None  # a touch's approach found what it reaches for (or a touch too light to report)
     if state["stopped_on_contact"]:
-        touched = ", ".join(f"{thing_name(c)} ({c.get('robot_link')})" for c in contacts) or "something"
-        return f"stopped on contact with {touched}", None
+        return f"stopped on contact with {touched_names(contacts)}", None
     if step.part_motion is not None:
         motion = step.part_motion
         achieved = motion.opening(state["tcp_pose"][:3, 3])

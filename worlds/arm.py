@@ -245,8 +245,8 @@ class Arm:
         previous = self._targets.copy()
         worst, done, stopped = 0.0, 0, False
         touches: dict[tuple[str, int, int], Touch] = {}
-        began: dict[tuple[str, int, int], float] = {}
-        for touch in self.touches(deeper_than=0.0):
+        began: dict[tuple[str, int, int], float] = {}  # what a move stopping on new contacts began against
+        for touch in self.touches(deeper_than=0.0) if stop_on_new_contact else ():
             if not ignore(touch.body, touch.link):
                 began[touch.between] = min(began.get(touch.between, 0.0), touch.depth)
         began_on = {(body, link) for _, body, link in began}
@@ -265,9 +265,10 @@ class Arm:
                     key = touch.between
                     if key not in touches or touch.depth < touches[key].depth:
                         touches[key] = touch
-                fresh = [t for t in new if (t.body, t.link) not in began_on
-                         or t.depth < began.get(t.between, 0.0) - PRESSED_DEEPER_M]
-                if (new and stop_on_contact) or (fresh and stop_on_new_contact):
+                fresh = stop_on_new_contact and any((t.body, t.link) not in began_on
+                                                    or t.depth < began.get(t.between, 0.0) - PRESSED_DEEPER_M
+                                                    for t in new)
+                if (new and stop_on_contact) or fresh:
                     stopped = True
                     self._targets = self.positions()
                     self._drive(self._targets, np.zeros(len(self.joints)))
