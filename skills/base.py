@@ -76,10 +76,12 @@ class SkillResult:
     executor wants them; ``held``: what the gripper holds at the end (a world label or None);
     ``tcp_pose``: the TCP's final world pose; ``achieved``: the part's opening it was left at (m or
     rad; doors and drawers). ``planning_ms`` / ``execution_s``: wall time of planning (the plan call,
-    whether it succeeded or not) and of running the steps; ``steps_done`` of ``steps``; ``contacts``: what the arm touched on the way; ``info``:
-    the plan's figures (IK and trajectory time, motion seconds, grasp or camera pose...); ``joints``:
-    the arm's joint positions in the last reply (rad or m, in the planner's ``joint_names`` order),
-    None when no reply carried them."""
+    whether it succeeded or not) and of running the steps; ``steps_done`` of ``steps``;
+    ``contacts``: what the arm touched on the way; ``info``: the plan's figures (IK and trajectory
+    time, motion seconds, grasp or camera pose...); ``joints``: the arm's joint positions in the
+    last reply (rad or m, in the planner's ``joint_names`` order), None when no reply carried them;
+    ``unplanned``: it failed because no plan was found (nothing moved), which callers tell apart
+    from a move that went wrong."""
 
     ok: bool
     reason: str = ""
@@ -94,6 +96,7 @@ class SkillResult:
     contacts: list[dict[str, Any]] = field(default_factory=list)
     info: dict[str, Any] = field(default_factory=dict)
     joints: np.ndarray | None = None
+    unplanned: bool = False
 
 
 class ArmSkill(PortedSkill):
@@ -156,6 +159,7 @@ class ArmSkill(PortedSkill):
         self._holding_still = False
         self._failure = ""
         self._request_error = ""
+        self._unplanned = False
 
     def setup(self, **kwargs: Any) -> None:
         """Take the tree's ``wake``, if it hands one: each reply of the world then wakes the tree.
@@ -228,6 +232,7 @@ class ArmSkill(PortedSkill):
             self._plan = self.plan(planner, q, base_pose, self.inputs)
         except (SkillPlanError, ValueError) as error:
             self._planning_ms = 1e3 * (time.perf_counter() - began)
+            self._unplanned = True
             return self._fail(f"plan: {error}")
         self._planning_ms = 1e3 * (time.perf_counter() - began)
         log.info("%s", self._plan.describe())
@@ -327,7 +332,7 @@ class ArmSkill(PortedSkill):
         last = self._last or {}
         return SkillResult(ok, reason, self.skill_name, last.get("held"), last.get("tcp_pose"), self._achieved,
                            self._planning_ms, execution, self._index,
-                           len(self._steps), list(self._contacts), info, last.get("q"))
+                           len(self._steps), list(self._contacts), info, last.get("q"), self._unplanned)
 
     def _succeed(self) -> Status:
         result = self._result(True, "")

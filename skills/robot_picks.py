@@ -153,8 +153,8 @@ class Picks:
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
                           surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=keep_off)
         if not result.ok:
-            planning = ": plan: " in result.reason
-            return SkillResult(False, result.reason + (beyond_reach(top, (stand_x, edge_y)) if planning else ""))
+            out_of_reach = beyond_reach(top, (stand_x, edge_y)) if result.unplanned else ""
+            return SkillResult(False, result.reason + out_of_reach)
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))

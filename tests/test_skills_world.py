@@ -325,13 +325,13 @@ def test_skills_fail_with_a_reason(link: WorldLink) -> None:
                          geometry.normal)
     missed = _run(OpenDrawer, link, geometry=short, amount=0.1, surface_z=surface_z)
     assert not missed.ok and "grasp the drawer handle: the gripper closed on nothing" in missed.reason
-    assert missed.steps_done == 2 and missed.held is None
+    assert missed.steps_done == 2 and missed.held is None and not missed.unplanned
 
     far = PartGeometry("drawer", geometry.handle_point + np.array([0.0, 1.5, 0.0]), geometry.handle_axis,
                        geometry.normal)
     unreachable = _run(OpenDrawer, link, geometry=far, amount=0.1)
     assert not unreachable.ok and "plan: IK: grasp pose of drawer handle unreachable" in unreachable.reason
-    assert unreachable.steps_done == 0
+    assert unreachable.steps_done == 0 and unreachable.unplanned
 
 
 def test_a_door_blocked_by_an_obstacle_in_its_swing_does_not_open_and_is_let_go(link: WorldLink) -> None:
