@@ -16,7 +16,8 @@ than a poll except the planning itself (tens to hundreds of milliseconds of IK):
      by more than `BLOCKED_RAD` (a
      push too gentle for the world to report as a contact still holds the arm back), fails; but a
      touch grasp's approach (`Step.touch`) that stops on touching only what it reaches for, or is
-     held back touching nothing else, has arrived (what follows is re-timed from where it stopped);
+     held back touching nothing else, has arrived (what follows is re-timed from where it stopped),
+     and so has the back-off from what the hand let go of, held back by a touch too light to report;
    - closing the gripper must catch what the step expects (a handle, an object), or, closing the
      fingers before a touch grasp's approach, nothing;
    - a move that carries a part (`skills.arm.skill_plan.PartMotion`) measures the part's opening from where

@@ -80,6 +80,8 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
 @pytest.mark.parametrize("reason, cause", [
     ("the arm stopped 0.041 rad short of its target: something held it back (a touch too light for the world "
      "to report as a contact)", "light touch"),
+    ("the arm stopped 0.104 rad short of its target: held back against handle 12 (panda_leftfinger)",
+     "held back against a contact"),
     ("stopped on contact with bowl 14 (panda_hand)", "contact stop"),
     ("IK: above unreachable: did not converge: best error 15.0 cm / 3.1 deg", "IK no solution"),
     ("idle spot: no free place 0.28 m across on the surface at 0.750 m", "no idle space"),

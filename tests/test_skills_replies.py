@@ -55,6 +55,28 @@ def test_a_move_held_back_within_a_voxel_of_its_target_has_arrived(short_m: floa
     assert ARRIVED_M == pytest.approx(0.015)
 
 
+HANDLE = {"category": "handle", "id": 12, "link": 3, "robot_link": "panda_leftfinger"}
+
+
+@pytest.mark.parametrize("touch, contacts, problem", [
+    # backing off a handle let go of, held back by a touch too light to report: the work is done
+    ("clear", (), ""),
+    # ... but a contact the world reports on the way back is named
+    ("clear", (HANDLE,), "held back against handle 12 (panda_leftfinger)"),
+    # any other move held back is short of its target, and says against what where it can
+    (None, (), "a touch too light for the world to report"),
+    (None, (HANDLE,), "held back against handle 12 (panda_leftfinger)"),
+])
+def test_a_back_off_held_back_by_a_light_touch_has_arrived(touch, contacts, problem) -> None:
+    target = np.eye(4)
+    target[:3, 3] = (0.5, 0.0, 0.9)
+    step = Step("move", "back off the door handle", samples=np.zeros((3, 8)), dt=0.01, tcp_target=target,
+                touch=touch)
+    reply = _reply(final_error=2 * BLOCKED_RAD, contacts=contacts, at=(0.5, -0.05, 0.9))
+    found, _ = step_problem(step, reply, _reply())
+    assert (found == "") if problem == "" else (problem in found and "short of its target" in found)
+
+
 @pytest.mark.parametrize("touched, problem", [
     ({"category": "box", "id": 5, "link": None, "robot_link": "panda_rightfinger"}, ""),
     # the fingertips came down on the cabinet's board, not the box on it: no arrival

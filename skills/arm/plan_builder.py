@@ -69,7 +69,7 @@ class PlanBuilder:
             stop_on_contact: the move stops on the first contact.
             tcp_target: where it ends the TCP (world).
             part_motion: what it does to a held part.
-            touch: what a touch grasp's approach touches.
+            touch: what the move arrives on when it is held back (`Step.touch`).
 
         Returns:
             The timed move.
@@ -104,7 +104,7 @@ class PlanBuilder:
             stop_on_contact: the move stops on the first contact.
             tcp_target: where it ends the TCP (world).
             part_motion: what it does to a held part.
-            touch: what a touch grasp's approach touches.
+            touch: what the move arrives on when it is held back (`Step.touch`).
 
         Raises:
             SkillPlanError: Ruckig finds no trajectory.
@@ -291,7 +291,8 @@ class PlanBuilder:
             retreat: the back-off's joint waypoints.
         """
         self.gripper("open", f"let go of the {what}")
-        self.move(f"back off the {what}", retreat, careful=True, tcp_target=self.base @ self.arm.kin.forward(retreat[-1]))
+        self.move(f"back off the {what}", retreat, careful=True,
+                  tcp_target=self.base @ self.arm.kin.forward(retreat[-1]), touch="clear")
 
     def finish(self, skill: str, info: dict[str, Any], ik: IKSearch | None = None) -> SkillPlan:
         """The plan made of the steps added.

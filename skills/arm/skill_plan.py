@@ -136,7 +136,9 @@ class Step:
             on nothing, to touch with their tips).
         touch: "handle" or "object" when the move is a touch grasp's approach, which arrives when
             it stops on touching that; "support" when it lowers what the hand carries, which
-            arrives where that is held back by what it is put on (the arm touching nothing).
+            arrives where that is held back by what it is put on (the arm touching nothing);
+            "clear" when it backs off what the hand let go of, which arrives where a touch too
+            light to report holds it back.
         stop_on_new_contact: the move stops on the first contact it did not begin with (a carry
             back from the thing it met on its way).
     """

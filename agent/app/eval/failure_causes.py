@@ -20,6 +20,7 @@ from typing import Any
 ACTION_CAUSES = (
     ("beyond the arm's reach", ("beyond the arm's reach",)),
     ("light touch", ("too light for the world to report",)),
+    ("held back against a contact", ("held back against",)),
     ("base unreachable", ("the base could not reach",)),
     ("contact stop", ("stopped on contact",)),
     ("IK no solution", ("IK:",)),
