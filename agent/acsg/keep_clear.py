@@ -21,6 +21,10 @@ from agent.perception.part_motion import DEFAULT_AMOUNT, part_motion
 #: How far to either side of a handle's lane nothing is put down: the wrist and forearm reaching
 #: for the handle pass up to ~20 cm beside the hand's own line.
 LANE_HALF_WIDTH_M = 0.15
+#: How far out of a handle a lane reaches at least, whichever way it faces (m): the hand at its
+#: pre-grasp pose 10 cm out and the wrist behind it. The handle of a door standing open faces aside,
+#: away from the robot as often as not, and the hand comes to it from that side all the same.
+LANE_LEAST_M = 0.3
 #: Openings sampled along each part's travel, and the spacing of a lane's points (m).
 OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
 
@@ -29,11 +33,11 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
                done_with: Collection[int] = ()) -> list[np.ndarray]:
     """Point sets (each (N, 3)) of the space every remembered door and drawer with a handle sweeps as
     the skills open it (`DEFAULT_AMOUNT`), and of the lanes its handle is reached along, shut and
-    open (a door is closed again from where it stands open): from the handle straight out of the
-    front towards the robot at ``robot_xy``, `LANE_HALF_WIDTH_M` to either side. ``eye``: where the
-    parts were seen from (it orients their fronts). A part whose geometry cannot be read is left
-    out, and so are the parts ``done_with``: opened and shut again, never to be reached for again,
-    their space is the table's like the rest.
+    open (a door is closed again from where it stands open): from the handle out the way it faces
+    at that opening, as far as the robot at ``robot_xy`` and `LANE_LEAST_M` at least,
+    `LANE_HALF_WIDTH_M` to either side. ``eye``: where the parts were seen from (it orients their
+    fronts). A part whose geometry cannot be read is left out, and so are the parts ``done_with``:
+    opened and shut again, never to be reached for again, their space is the table's like the rest.
 
     Args:
         memory: the remembered instances.
@@ -54,15 +58,16 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
         except GeometryError:
             continue
         points = part.points()
-        across = np.cross(geometry.normal, [0.0, 0.0, 1.0])
-        across /= max(float(np.linalg.norm(across)), 1e-9)
         offsets = np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, LANE_STEP_M)
         for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], OPENINGS_SAMPLED):
             motion = part_motion(geometry, float(amount))
             kept.append(points @ motion[:3, :3].T + motion[:3, 3])
             handle_at = motion[:3, :3] @ geometry.handle_point + motion[:3, 3]
-            out = max(0.0, float((np.asarray(robot_xy, dtype=float)[:2] - handle_at[:2]) @ geometry.normal[:2]))
-            lane = handle_at + np.arange(0.0, out, LANE_STEP_M)[:, None] * geometry.normal
+            facing = motion[:3, :3] @ geometry.normal  # an open door's handle faces aside
+            across = np.cross(facing, [0.0, 0.0, 1.0])
+            across /= max(float(np.linalg.norm(across)), 1e-9)
+            out = max(LANE_LEAST_M, float((np.asarray(robot_xy, dtype=float)[:2] - handle_at[:2]) @ facing[:2]))
+            lane = handle_at + np.arange(0.0, out, LANE_STEP_M)[:, None] * facing
             kept.extend(lane + offset * across for offset in offsets)
     return kept
 
