@@ -5,6 +5,7 @@ arm into the base from wherever it is, a hand left out among things first backed
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -52,7 +53,9 @@ def plan_stow(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, *, surface_z: flo
     backs straight out along the gripper's axis and towards the base
     (`skills.arm.grasp_lines.backed_off`), as every skill ends: a fold begun at once would swing
     the hand through what it reaches into, and stop on touching it at its first sample. Where no
-    straight way back can be planned, the arm folds from where it is.
+    straight way back can be planned, the arm folds from where it is. The fold stops on a contact
+    it did not begin with (`Step.stop_on_new_contact`), so an arm left touching something folds
+    away from it.
 
     Args:
         arm: the arm planned for, with a stowed pose.
@@ -81,4 +84,7 @@ def plan_stow(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, *, surface_z: flo
         if back is not None:
             builder.move("back off", back, careful=True, tcp_target=builder.base @ arm.kin.forward(back[-1]))
     builder.free_move("to the stowed pose", arm.stowed)
+    # leaving what the arm was left against (the door a back-off was held against): a move that
+    # stops on any contact stops at its first sample there, and every drive after it is refused
+    builder.steps[-1] = replace(builder.steps[-1], stop_on_contact=False, stop_on_new_contact=True)
     return builder.finish(skill, {"goal": arm.stowed}, ik)

@@ -30,7 +30,7 @@ import numpy as np
 
 from agent.perception.grasp_poses import grasp_pose
 from agent.perception.part_geometry import PartGeometry
-from agent.perception.part_motion import moved_geometry
+from agent.perception.part_motion import moved_geometry, part_motion
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Clearance
@@ -196,21 +196,23 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     A drawer pushed shut is pushed on `PUSH_PAST` beyond where it was seen shut, until it stops
     against the end of its travel: seen from before it, a shut drawer's handle is placed a
     centimetre or so out, and a drawer pushed only that far stood 9–11 mm out, more than the 5 % of
-    its travel that counts as shut. The level grasps are tried first; where none fits (a drawer's bar too low over a table for the
-    hand across it), a drawer's bar is grasped from above. Whichever way the part moves, the chain
-    is solved from the closed grasp outwards (the grasp, then the part's path to its open end, then
-    the straight lines off either end of it) and the pieces are put in the order the arm runs
-    them; so closing a part takes the posture its opening took, which is known to reach along the
-    whole path. With ``keep_off``, the first chain of any grasp variant along which the arm and
-    hand keep clear of it, and the links of ``part_points`` on the way in, is taken
-    (`_part_chains`, `_chain_problem`), and the free move to it keeps clear of both; where none
-    does, the plan is the one made without them: the first chain that reaches, its free move kept
-    off only ``part_points``. What stands near is known only by the points seen of it, and a
-    posture that touches a voxel of it is still better than no plan. The hand is on the part
-    from the grasp on, and the part moves: its points count for the links on the way in and for
-    the free move, not for the hand at the grasp or along the part's path (recursive 1025 of
-    tuning-wide: on its way to an open door's handle, the arm came down on the door, and the door
-    was left open).
+    its travel that counts as shut. The level grasps are tried first; where none fits (a drawer's
+    bar too low over a table for the hand across it), a drawer's bar is grasped from above.
+    Whichever way the part moves, the chain is solved from the closed grasp outwards (the grasp,
+    then the part's path to its open end, then the straight lines off either end of it) and the
+    pieces are put in the order the arm runs them; so closing a part takes the posture its opening
+    took, which is known to reach along the whole path. With ``keep_off``, the first chain of any
+    grasp variant along which the arm and hand keep clear of it, and the links of ``part_points`` on
+    the way in, is taken (`_part_chains`, `_chain_problem`), and the free move to it keeps clear of
+    both; of those, the first whose back-off keeps the links off the part where it is left goes
+    first (backing off an open door's handle, the forearm lying along the leaf pushed the door on by
+    0.3 rad and was held back against it: occlusion 1052 of tuning-wide); where none does, the plan
+    is the one made without them: the first chain that reaches, its free move kept off only
+    ``part_points``. What stands near is known only by the points seen of it, and a posture that
+    touches a voxel of it is still better than no plan. The hand is on the part from the grasp on,
+    and the part moves: its points count for the links on the way in and for the free move, not for
+    the hand at the grasp or along the part's path (recursive 1025 of tuning-wide: on its way to an
+    open door's handle, the arm came down on the door, and the door was left open).
     """
     what = f"{geometry.kind} handle"
     opening = end > start
@@ -230,11 +232,14 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
                  for points in (keep_off, part_points))
     clearance = Clearance(arm, base, surface_z, near) if len(near) else None
     itself = Clearance(arm, base, surface_z, own) if len(own) else None
+    left = None if hold or not len(own) else Clearance(arm, base, surface_z, _moved(own, geometry, start, end))
     checked = clearance is not None or itself is not None
     builder = PlanBuilder(arm, here, base_pose, surface_z, itself)
     failures: dict[str, list[str]] = {}
     # the chain taken without the check: the first that reaches, of the first variant that has one
     fallback: tuple[HandleGrasp, list[np.ndarray], _Chain] | None = None
+    # the first chain clear of what stands near whose back-off sweeps the part where it was left
+    brushing: tuple[HandleGrasp, list[np.ndarray], _Chain] | None = None
     for way in (*level_grasps(path[0]), *handle_top_grasps(geometry)):
         poses = [pose @ way.offset for pose in path]
         tried = failures.setdefault(way.name, [])
@@ -247,11 +252,16 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
                 fallback = fallback or (way, poses, chain)
                 break
             if _chain_problem(clearance, itself, chain) is None:
-                builder.clearance = Clearance(arm, base, surface_z, np.vstack([near, own]))
-                return _build(builder, ik, geometry, way, poses, chain, (start, end), shut, skill, hold, clear=True)
+                if left is None or left.path_problem(chain[2], every=2) is None:
+                    builder.clearance = Clearance(arm, base, surface_z, np.vstack([near, own]))
+                    return _build(builder, ik, geometry, way, poses, chain, (start, end), shut, skill, hold, clear=True)
+                brushing = brushing or (way, poses, chain)
             fallback = fallback or (way, poses, chain)
         if not checked and fallback is not None:
             break
+    if brushing is not None:
+        builder.clearance = Clearance(arm, base, surface_z, np.vstack([near, own]))
+        return _build(builder, ik, geometry, *brushing, (start, end), shut, skill, hold, clear=True)
     if fallback is not None:
         return _build(builder, ik, geometry, *fallback, (start, end), shut, skill, hold, clear=False)
     raise SkillPlanError("; ".join(best_failure(tried, what) if name == "level" else
@@ -280,6 +290,12 @@ def _build(builder: PlanBuilder, ik: IKSearch, geometry: PartGeometry, way: Hand
     info = {"grasp_pose": grasp, "release_pose": release, "grasp": way.name, "kind": geometry.kind,
             "start": start, "end": end, "held": hold, "clear": clear}
     return builder.finish(skill, info, ik)
+
+
+def _moved(points: np.ndarray, geometry: PartGeometry, start: float, end: float) -> np.ndarray:
+    """The part's ``points``, remembered opened by ``start``, where they stand opened by ``end``."""
+    motion = part_motion(geometry, end) @ np.linalg.inv(part_motion(geometry, start))
+    return points @ motion[:3, :3].T + motion[:3, 3]
 
 
 def _chain_problem(near: Clearance | None, itself: Clearance | None, chain: _Chain) -> str | None:
