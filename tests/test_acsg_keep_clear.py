@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agent.acsg.keep_clear import LANE_LEAST_M, kept_clear, way_out
+from agent.acsg.keep_clear import LANE_LEAST_M, LANE_STEP_M, kept_clear, way_out
 from agent.perception.memory import InstanceMemory
 from agent.perception.part_geometry import handle_geometry
 from agent.perception.part_motion import DEFAULT_AMOUNT, part_motion
@@ -79,6 +79,6 @@ def test_the_lane_to_an_open_door_s_handle_runs_the_way_the_handle_faces(hinge: 
     assert abs(facing[0]) > 0.8  # aside
     for robot in (np.array([0.0, -0.9]), handle_open[:2] - 1.0 * facing[:2]):  # before it; behind the handle
         kept = np.vstack(kept_clear(memory, EYE, robot))
-        for out in (0.1, 0.2, LANE_LEAST_M - 0.05):
+        for out in (0.05, 0.1, LANE_LEAST_M - LANE_STEP_M):
             gap = np.linalg.norm(kept - (handle_open + out * facing), axis=1).min()
             assert gap < 0.04, (robot, out, gap)

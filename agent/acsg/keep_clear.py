@@ -22,9 +22,12 @@ from agent.perception.part_motion import DEFAULT_AMOUNT, part_motion
 #: for the handle pass up to ~20 cm beside the hand's own line.
 LANE_HALF_WIDTH_M = 0.15
 #: How far out of a handle a lane reaches at least, whichever way it faces (m): the hand at its
-#: pre-grasp pose 10 cm out and the wrist behind it. The handle of a door standing open faces aside,
-#: away from the robot as often as not, and the hand comes to it from that side all the same.
-LANE_LEAST_M = 0.3
+#: pre-grasp pose 10 cm out and the hand itself behind that. The handle of a door standing open
+#: faces aside, away from the robot as often as not, and the hand comes to it from that side all
+#: the same. At 0.3 m the lane took the place a box out of a cabinet had gone to and come back
+#: from, and it found no way back (recursive 1025 of tuning-wide); at 0.15 m the bottle beside an
+#: open door's handle was back in the hand's way (occlusion 1155).
+LANE_LEAST_M = 0.2
 #: Openings sampled along each part's travel, and the spacing of a lane's points (m).
 OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
 
