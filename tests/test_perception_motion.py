@@ -376,6 +376,24 @@ def test_a_thing_where_a_moved_thing_stood_lies_inside_what_was_there() -> None:
     assert relations[table_i.id] == (None, None)
 
 
+def test_a_thing_under_a_box_seen_only_by_its_top_lies_inside_that_box_not_the_one_around_it() -> None:
+    """A nest lifted apart: the outer box (seen whole from the side) and then the inner one (seen only
+    from above, down inside the outer, by its top 4 cm) moved away, and a cup found where they stood.
+    The cup's centre is below what was seen of the inner box; it lay under the inner box all the same
+    (recursive 1066 and 1073 of tuning-wide), not loose in the outer one."""
+    cup = Box.at(7, "cup", (0.0, 0.0, 0.795), (0.06, 0.06, 0.09))
+    memory = InstanceMemory()
+    _see(memory, [TABLE, cup])
+    cup_i = _one(memory, "cup")
+    outer = (np.array([-0.1, -0.1, 0.75]), np.array([0.1, 0.1, 0.9]))
+    inner_top = (np.array([-0.075, -0.075, 0.84]), np.array([0.075, 0.075, 0.88]))
+    assert cup_i.centroid[2] < inner_top[0][2]
+    relations = _relations(memory, vacated={1001: outer, 1002: inner_top})
+    assert relations[cup_i.id] == ("1002", "inside")
+    beside = (np.array([0.05, -0.075, 0.84]), np.array([0.095, 0.075, 0.88]))  # not over the cup's centre
+    assert _relations(memory, vacated={1001: outer, 1002: beside})[cup_i.id] == ("1001", "inside")
+
+
 def _tray(id: int, x: tuple[float, float], y: tuple[float, float], z: tuple[float, float],
           t: float = 0.015) -> list[Box]:
     """An open drawer's body, one id: a bottom, two sides, a back and a front (facing -y)."""

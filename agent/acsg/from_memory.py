@@ -8,12 +8,13 @@ object standing in that box is found to block it. All of it is read from the rem
 - a handle belongs to its door or drawer, and a door or drawer to its storage piece (the memory
   attaches parts by adjacency);
 - any other thing lies *inside* the smallest box that contains its centre: a storage piece's, an
-  open drawer's, a box put over it, or the box a thing moved away
-  filled before it was moved (``vacated``: a cup found where a box was lifted from lay inside the
-  box); else it stands *on* the highest thing whose top is below its bottom (within
-  ``SUPPORT_GAP_M`` / 2 above it) and under its centre (a piece's top counting its parts: a chest
-  whose front is all drawers), however far below: a thing seen only from above, its bottom unseen,
-  does not float;
+  open drawer's, a box put over it, or the box a thing moved away filled before it was moved
+  (``vacated``: a cup found where a box was lifted from lay inside the box), that box reaching
+  down to the thing's bottom (a box seen from above, standing in a larger one, is remembered by its
+  top few centimetres, and what it covered stood below them);
+- else it stands *on* the highest thing whose top is below its bottom (within ``SUPPORT_GAP_M`` / 2
+  above it) and under its centre (a piece's top counting its parts: a chest whose front is all
+  drawers), however far below: a thing seen only from above, its bottom unseen, does not float;
 - a drawer sweeps its front's box pulled out by ``drawer_pull_m``; a door sweeps the square in
   front of it whose side is the door's width (the quarter circle it swings through, boxed).
 """
@@ -83,7 +84,8 @@ def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], 
     centre = inst.centroid
     lo, _ = boxes[inst.id]
     own = _volume(inst.bounds)
-    containers = [(box, other_id) for other_id, box in vacated.items() if other_id != inst.id]
+    containers = [(_reaching_down(box, lo[2]), other_id)  # the lower part of a thing moved away was hidden
+                  for other_id, box in vacated.items() if other_id != inst.id]
     containers += [(other.bounds, other.id) for other in live  # own boxes: an open door's swing contains nothing
                    if other.id != inst.id and other.label not in ("door", HANDLE)]
     inside = [(_volume(box), other_id) for box, other_id in containers if _contains(box, centre) and _volume(box) > own]
@@ -102,6 +104,12 @@ def _relation(inst: Instance, live: list[Instance], by_id: dict[int, Instance], 
         top = max(supports, key=lambda other: boxes[other.id][1][2])
         return (top.parent, "on") if top.label in PARTS and top.parent in by_id else (top.id, "on")
     return None, None
+
+
+def _reaching_down(box: Box, bottom: float) -> Box:
+    """``box`` with its bottom at ``bottom`` where that is lower."""
+    lo, hi = (np.asarray(corner, dtype=float) for corner in box)
+    return np.array([lo[0], lo[1], min(float(lo[2]), bottom)]), hi
 
 
 def _contains(box: Box, point: np.ndarray) -> bool:
