@@ -201,14 +201,30 @@ class Clearance:
             local = (centres - frame[:3, 3]) @ frame[:3, :3]
             if float(_outside(local, carried.lo, carried.hi).min()) < reach:
                 return "the arm's links would touch what the hand carries"
-            if self.tree is not None:
-                corners = carried.world_corners(tcp)
-                lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
-                lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
-                middle, half = (lo + hi) / 2, (hi - lo) / 2
-                near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
-                if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:
-                    return "what the hand carries would touch what stands near"
+            return self.carried_problem(q, carried)
+        return None
+
+    def carried_problem(self, q: np.ndarray, carried: Carried) -> str | None:
+        """What the thing the hand holds would touch with the arm at ``q``, in words; None when
+        nothing. Its box, `clearance` larger, is what counts, less what it stands on or is lifted
+        off (`SUPPORT_M` up from its bottom).
+
+        Args:
+            q: (dof,) joint positions.
+            carried: what the hand holds.
+
+        Returns:
+            The reason, or None.
+        """
+        if self.tree is None:
+            return None
+        corners = carried.world_corners(self.base @ self.arm.kin.forward(q))
+        lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
+        lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
+        middle, half = (lo + hi) / 2, (hi - lo) / 2
+        near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
+        if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:
+            return "what the hand carries would touch what stands near"
         return None
 
     def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1,

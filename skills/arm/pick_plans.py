@@ -3,8 +3,8 @@
 Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto its top (the
 fingers closing across the line of sight from the robot where the object fits that way, since
 perception places things worst along it, unless the hand would touch less of what stands near
-coming down another way; an object wider than the opening is held by the closed fingertips brought down onto its top until they touch,
-`skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
+coming down another way; an object wider than the opening is held by the closed fingertips
+brought down onto its top until they touch, `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
 little above where it should, or until it meets what it is put on first (a top a little higher
 than the memory had it holds the arm back without the arm touching anything: the world puts a
 released object down onto whatever is under it), open, back up, ready. Under a board close over
@@ -137,11 +137,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
     # checks, to the first place, the first grasp that reaches at all, unless it is confined
-    # (`_plain_routes`).
+    # (`_plain_routes`) or carries the object into what stands near (`_carried_into`).
     first = [] if grasp_first is None else [(route, clear) for route, clear in clear_routes([grasp_first])[1]
                                              if grasp_first.touch or np.any(route.inward) or np.any(route.out)]
     ways_to, routes = clear_routes(grasps)
     routes = [*first, *routes, *((route, False) for route in _plain_routes(ways_to[0], lift_m, keep_off))]
+    carried_into: str | None = None
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release
         carried = Carried.held_at(grasp, top - size[2] / 2 * UP, size)
@@ -155,6 +156,10 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         try:
             if not clear:
                 chains = ik.chain(stages)
+                met = _carried_into(clearance, dict(zip((stage[0] for stage in stages), chains))["carry"], carried)
+                if met is not None:
+                    carried_into = met
+                    continue
             elif np.any(route.inward):  # into storage: from inside it first, then as it came
                 chains = _retraced(ik, stages, check, route.backs_off) or ik.clear_chain(stages, check)
             else:
@@ -178,10 +183,25 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         info = {"grasp_pose": grasp, "release_pose": release, "object_point": top, "place_point": place,
                 "grasp_depth_m": way.depth, "grasp": way.name, "grasp_way": way, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
+    if carried_into is not None:
+        raise SkillPlanError(f"pick: no route clear of what stands near, and on every route taken unchecked "
+                             f"{carried_into} on the carry")
     if not failures:
         raise SkillPlanError("pick: no route clear of what stands near, and none is taken unchecked under a board "
                              "close over the object or its place")
     raise SkillPlanError(best_failure(failures, "pick"))
+
+
+def _carried_into(clearance: Clearance, waypoints: np.ndarray, carried: Carried) -> str | None:
+    """What the thing carried along ``waypoints`` would meet (`Clearance.carried_problem`), or None.
+    A route taken unchecked is still not carried into what stands near: at the back of a table,
+    where no route reached clear, the box carried straight across to its place met the chest beside
+    it and pushed its drawers 56 cm in (recursive 1144 of tuning-wide)."""
+    for q in waypoints:
+        problem = clearance.carried_problem(q, carried)
+        if problem is not None:
+            return problem
+    return None
 
 
 def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCheck, backs_off: bool = False
