@@ -91,7 +91,7 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
      "close over the object or its place" + beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)),
      "beyond the arm's reach"),
     ("pick: no route clear of what stands near, and on every route taken unchecked what the hand carries would "
-     "touch what stands near on the carry", "carry would meet what stands near"),
+     "pass through what stands near", "carry would meet what stands near"),
     ("the base could not reach (0.12, -0.80, 90°): it touched door", "base unreachable"),
     ("door 7 has no handle the robot has seen", "no handle points"),
     ("the gripper closed on nothing (0 mm between the fingers)", "grasp closed on nothing"),

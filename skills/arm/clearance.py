@@ -201,31 +201,37 @@ class Clearance:
             local = (centres - frame[:3, 3]) @ frame[:3, :3]
             if float(_outside(local, carried.lo, carried.hi).min()) < reach:
                 return "the arm's links would touch what the hand carries"
-            return self.carried_problem(q, carried)
+            if self.tree is not None:
+                corners = carried.world_corners(tcp)
+                lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
+                lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
+                middle, half = (lo + hi) / 2, (hi - lo) / 2
+                near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
+                if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:
+                    return "what the hand carries would touch what stands near"
         return None
 
-    def carried_problem(self, q: np.ndarray, carried: Carried) -> str | None:
-        """What the thing the hand holds would touch with the arm at ``q``, in words; None when
-        nothing. Its box, `clearance` larger, is what counts, less what it stands on or is lifted
-        off (`SUPPORT_M` up from its bottom).
+    def carried_meets(self, q: np.ndarray, carried: Carried) -> bool:
+        """Whether the thing the hand holds, with the arm at ``q``, would stand in what stands near:
+        its own box, turned as it is held, with no margin (`problem` keeps `clearance` round the
+        box squared to the world). What a route taken unchecked may not do.
 
         Args:
             q: (dof,) joint positions.
             carried: what the hand holds.
 
         Returns:
-            The reason, or None.
+            Whether `TOUCHING_POINTS` or more of what stands near lie inside its box.
         """
         if self.tree is None:
-            return None
-        corners = carried.world_corners(self.base @ self.arm.kin.forward(q))
-        lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
-        lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
-        middle, half = (lo + hi) / 2, (hi - lo) / 2
-        near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
-        if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:
-            return "what the hand carries would touch what stands near"
-        return None
+            return False
+        frame = carried.frame(self.base @ self.arm.kin.forward(q))
+        middle = frame[:3, :3] @ ((carried.lo + carried.hi) / 2) + frame[:3, 3]
+        near = self.tree.query_ball_point(middle, float(np.linalg.norm(carried.hi - carried.lo)) / 2)
+        if not near:
+            return False
+        local = (self.tree.data[near] - frame[:3, 3]) @ frame[:3, :3]
+        return int((_outside(local, carried.lo, carried.hi) <= 0.0).sum()) >= TOUCHING_POINTS
 
     def path_problem(self, waypoints: np.ndarray, carried: Carried | None = None, every: int = 1,
                      hand: bool = False) -> str | None:
