@@ -4,15 +4,15 @@ Above the object (in from higher up, straight down: `HIGH_ABOVE_M`), down onto i
 fingers closing across the line of sight from the robot where the object fits that way, since
 perception places things worst along it, unless the hand would touch less of what stands near
 coming down another way; an object wider than the opening is held by the closed fingertips
-brought down onto its top until they touch, `skills.arm.grasps.object_grasps`), close, lift, carry at height, lower until the object stands a
-little above where it should, or until it meets what it is put on first (a top a little higher
-than the memory had it holds the arm back without the arm touching anything: the world puts a
-released object down onto whatever is under it), open, back up, ready. Under a board close over
-it (a box in a cabinet), the hand takes its top's near edge leaning back towards the robot, or,
-where the board leaves too little room for that wrist, the side facing the robot, the hand level
-(`skills.arm.grasps.side_grasps`); the object is drawn straight out of the storage, and the hand
-backs off it level after letting go. What stands over and around the object, and the room it
-leaves, is `skills.arm.headroom`'s.
+brought down onto its top until they touch, `skills.arm.grasps.object_grasps`), close, lift,
+carry at height, lower until the object stands a little above where it should, or until it meets
+what it is put on first (a top a little higher than the memory had it holds the arm back without
+the arm touching anything: the world puts a released object down onto whatever is under it),
+open, back up, ready. Under a board close over it (a box in a cabinet), the hand takes its top's
+near edge leaning back towards the robot, or, where the board leaves too little room for that
+wrist, the side facing the robot, the hand level (`skills.arm.grasps.side_grasps`); the object is
+drawn straight out of the storage, and the hand backs off it level after letting go. What stands
+over and around the object, and the room it leaves, is `skills.arm.headroom`'s.
 """
 
 from __future__ import annotations
