@@ -26,8 +26,9 @@ LANE_HALF_WIDTH_M = 0.15
 #: faces aside, away from the robot as often as not, and the hand comes to it from that side all
 #: the same. At 0.3 m the lane took the place a box out of a cabinet had gone to and come back
 #: from, and it found no way back (recursive 1025 of tuning-wide); at 0.15 m the bottle beside an
-#: open door's handle was back in the hand's way (occlusion 1155).
-LANE_LEAST_M = 0.2
+#: open door's handle was back in the hand's way (occlusion 1155); at 0.2 m a bottle put down by
+#: a door's hinge held the hand backing off the door's handle (occlusion 1092).
+LANE_LEAST_M = 0.25
 #: Openings sampled along each part's travel, and the spacing of a lane's points (m).
 OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
 
