@@ -339,6 +339,30 @@ def test_the_rule_verifier_never_names_furniture_as_an_obstacle() -> None:
     assert RuleDecisionModule().verify(opening, DecisionContext(g, visible)) == ["o4"]
 
 
+def test_the_rule_verifier_names_no_obstacle_only_grazing_what_a_drawer_sweeps() -> None:
+    """A box beside a chest, its remembered box 7 mm into the sweep (recursive 1087 of tuning-wide),
+    is not in the way; one reaching 3 cm into it is."""
+    from agent.acsg.graph import ACSG
+    from agent.acsg.interfaces import Detection
+
+    g = ACSG()
+    for node_id, label in (("o0", "table"), ("o2", "drawer chest"), ("o3", "drawer"), ("o4", "box")):
+        g.add_object(node_id, label)
+    g.add_edge("o2", "o3", relation="belongs")
+    g.add_edge("o0", "o4", relation="on")
+    opening = g.add_action("open:3", "open", "o3", "open_drawer")
+    swept = ((-0.03, -0.17, 0.75), (0.391, 0.11, 0.91))
+    extent = np.array([0.26, 0.33, 0.09])
+
+    def verified(left_edge: float) -> list[str]:
+        box = Detection("4", "box", "0", "on", centroid=np.array([left_edge + 0.13, -0.218, 0.819]), extent=extent)
+        return RuleDecisionModule().verify(opening, DecisionContext(g, {"o3": Detection(
+            "3", "drawer", "2", "belongs", hints={"swept": swept}), "o4": box}))
+
+    assert verified(0.384) == []
+    assert verified(0.361) == ["o4"]
+
+
 # ---- every ground-truth scene ----------------------------------------------------------------------
 
 def test_exploring_every_tabletop_scene_recovers_its_ground_truth() -> None:

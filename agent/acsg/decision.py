@@ -77,8 +77,10 @@ def surrounding_objects(action: ActionNode, context: DecisionContext, radius_m: 
     return found
 
 
-def _boxes_overlap(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray) -> bool:
-    return bool(np.all(lo_a < hi_b) and np.all(lo_b < hi_a))
+def _boxes_overlap(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray, by_m: float = 0.0
+                   ) -> bool:
+    """Whether two boxes overlap by more than ``by_m`` along every axis."""
+    return bool(np.all(lo_a + by_m < hi_b) and np.all(lo_b + by_m < hi_a))
 
 
 @dataclass(frozen=True)
@@ -88,13 +90,19 @@ class RuleDecisionModule:
     Proposer: storage (by label, or anything with openable parts) -> "open"; covers, and vessels
     marked upside down (attribute ``upside_down``) -> "pick"; anything else -> "none".
     Verifier: only opening can be blocked; an object blocks it when its ``blocks`` hint names the
-    part, or its box overlaps the part's ``swept`` hint (lo, hi); storage never does, as it is not
-    picked up.
+    part, or its box overlaps the part's ``swept`` hint (lo, hi) by more than ``sweep_margin_m``;
+    storage never does, as it is not picked up.
+
+    ``sweep_margin_m``: how deep an object's box must reach into the swept box to block. The boxes
+    a robot's memory gives reach up to a voxel (1 cm) past the thing on each side: a box standing
+    4 cm beside a chest was remembered 3.4 cm wider, 7 mm into what the chest's drawer sweeps, and
+    was lifted out of a way it was never in (recursive 1087 of tuning-wide).
     """
 
     storage_labels: Collection[str] = STORAGE_LABELS
     cover_labels: Collection[str] = COVER_LABELS
     vessel_labels: Collection[str] = VESSEL_LABELS
+    sweep_margin_m: float = 0.01
 
     def propose(self, obj: ObjectNode, context: DecisionContext) -> Proposal:
         """Open storage and what has parts, pick up covers and upturned vessels, leave the rest.
@@ -146,7 +154,8 @@ class RuleDecisionModule:
                 blockers.append(det.id)
             elif swept is not None and det.centroid is not None and det.extent is not None:
                 lo, hi = (np.asarray(v, dtype=float) for v in swept)
-                if _boxes_overlap(det.centroid - det.extent / 2, det.centroid + det.extent / 2, lo, hi):
+                if _boxes_overlap(det.centroid - det.extent / 2, det.centroid + det.extent / 2, lo, hi,
+                                  self.sweep_margin_m):
                     blockers.append(det.id)
         return blockers
 
