@@ -18,8 +18,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from agent.acsg.from_memory import Box
+from agent.acsg.from_memory import SUPPORT_GAP_M, Box
 from agent.observation import Observation
+from agent.perception.grasp_poses import top_grasp_point
 from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
 from agent.planning.route import Routes
@@ -253,6 +254,21 @@ class RobotBody:
             if float(np.linalg.norm(gap)) <= reach_m and top < under[2]:
                 found.append((top, inst))
         return max(found, key=lambda pair: pair[0], default=(None, None))[1]
+
+    def stood_on(self, inst: Instance) -> Instance | None:
+        """The table or counter a remembered thing stands on: the `surface` under the middle of its
+        top, below its lowest voxel raised by how far that may sink into what it stands on
+        (`SUPPORT_GAP_M` / 2). A bottle's lowest voxel lay 1.5 cm under a table's top, and it was
+        put down on nothing: "no table or counter in memory" (occlusion 1156 of tuning-wide).
+
+        Args:
+            inst: the thing.
+
+        Returns:
+            The surface, or None where none is under it.
+        """
+        top, bottom = top_grasp_point(inst.points()), float(inst.bounds[0][2])
+        return self.surface(np.array([top[0], top[1], bottom + SUPPORT_GAP_M / 2]))
 
     def surface_z(self, under: np.ndarray, reach_m: float = 0.0) -> float | None:
         """The height of the top of `surface` (``under``, ``reach_m``).

@@ -108,7 +108,7 @@ class Picks:
             raise SkillPlanError("the robot has not looked yet")
         points = obj.points()
         top, box = top_grasp_point(points), obj.bounds
-        surface = body.surface(np.array([top[0], top[1], box[0][2] + 0.01]))  # under its bottom
+        surface = body.stood_on(obj)
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
         keep_off = self._near(obj)

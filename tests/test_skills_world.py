@@ -28,6 +28,8 @@ from agent.perception.memory import InstanceMemory
 from agent.perception.part_geometry import PartGeometry, handle_geometry
 from worlds.bus.link import WorldLink
 from skills.base import SkillResult
+from skills.registry import SkillRegistry
+from skills.robot_body import RobotBody, surface_top
 from skills.context import SkillContext
 from skills.ports import PortError
 from skills.running import run_to_end
@@ -38,6 +40,8 @@ from worlds.storage_placement import StoragePlacement
 from worlds.tabletop import tabletop_variant
 from worlds.tabletop_scene import TabletopObject, TabletopScene
 from worlds.urdf import handle_boxes
+from test_perception_scene import INTRINSICS, look_at, render
+from test_perception_scene import Box as SceneBox
 
 TIMINGS: list[str] = []
 
@@ -203,6 +207,24 @@ def _facing_object_on_the_table(link: WorldLink, task: str, variant: int, catego
     observation = _observe(link, memory)
     start = _pixels(observation, thing.instance_id).mean(axis=0)
     return thing, memory, observation, memory.get(seen.id), start
+
+
+def test_a_thing_whose_lowest_voxel_sinks_into_the_table_stands_on_the_table(link: WorldLink) -> None:
+    # occlusion 1156 (tuning-wide): a bottle's lowest voxel lay 1.5 cm under the table's top, and
+    # the pick away found no table under it to put it down on. Here it stands in a recess 1 cm deep.
+    x0, x1, y0, y1 = 0.14, 0.26, -0.06, 0.06
+    table = [SceneBox(1, "table", lo, hi) for lo, hi in (
+        ((-0.8, -0.35, 0.71), (x0, 0.55, 0.75)), ((x1, -0.35, 0.71), (0.8, 0.55, 0.75)),
+        ((x0, -0.35, 0.71), (x1, y0, 0.75)), ((x0, y1, 0.71), (x1, 0.55, 0.75)), ((x0, y0, 0.71), (x1, y1, 0.74)))]
+    bottle = SceneBox(6, "bottle", (0.165, -0.035, 0.74), (0.235, 0.035, 0.94))
+    memory = InstanceMemory()
+    pose = look_at(np.array([-0.25, -0.9, 1.45]), (0.1, 0.3, 0.9))
+    memory.integrate_frame(*render([*table, bottle], pose), INTRINSICS, pose)
+    body = RobotBody(link, memory, SkillRegistry(), skill_timeout_s=10.0)
+    [table_i], [bottle_i] = memory.with_label("table"), memory.with_label("bottle")
+    assert surface_top(table_i) > bottle_i.bounds[0][2] + 0.01  # its seen bottom under the table's top
+    assert body.stood_on(bottle_i) is table_i
+    assert body.stood_on(table_i) is None  # a table stands on the floor
 
 
 def test_an_object_is_picked_away_to_an_idle_spot_and_put_back(link: WorldLink) -> None:
