@@ -90,8 +90,8 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
     ("pick_away: plan: pick: no route clear of what stands near, and none is taken unchecked under a board "
      "close over the object or its place" + beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)),
      "beyond the arm's reach"),
-    ("pick: no route clear of what stands near, and on every route taken unchecked what the hand carries would "
-     "pass through what stands near", "carry would meet what stands near"),
+    ("pick: no route clear of what stands near, and every route taken unchecked that reaches would carry it "
+     "through what stands near", "carry would meet what stands near"),
     ("the base could not reach (0.12, -0.80, 90°): it touched door", "base unreachable"),
     ("door 7 has no handle the robot has seen", "no handle points"),
     ("the gripper closed on nothing (0 mm between the fingers)", "grasp closed on nothing"),

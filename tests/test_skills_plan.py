@@ -626,7 +626,7 @@ def test_of_several_places_a_pick_takes_the_first_a_clear_way_reaches(planner: A
     # To the first place alone no route is clear, and the one taken unchecked would carry the box
     # through the wall: refused (the box carried across the back of a table into a chest's drawers
     # pushed them 56 cm in, recursive 1144 of tuning-wide).
-    with pytest.raises(SkillPlanError, match="what the hand carries would pass through what stands near"):
+    with pytest.raises(SkillPlanError, match="every route taken unchecked that reaches would carry it through"):
         planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), blocked, surface_z=SURFACE, keep_off=wall)
     # A rim close round the object, up to 3 cm under its top: no finger comes down clear of it, and
     # the carry passes over it: taken unchecked, as before.

@@ -183,8 +183,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                 "grasp_depth_m": way.depth, "grasp": way.name, "grasp_way": way, "lift_m": route.lift, "clear": clear}
         return builder.finish(skill, info, ik)
     if carried_into:
-        raise SkillPlanError("pick: no route clear of what stands near, and on every route taken unchecked what the "
-                             "hand carries would pass through what stands near")
+        raise SkillPlanError("pick: no route clear of what stands near, and every route taken unchecked that reaches "
+                             "would carry it through what stands near")
     if not failures:
         raise SkillPlanError("pick: no route clear of what stands near, and none is taken unchecked under a board "
                              "close over the object or its place")

@@ -25,7 +25,7 @@ ACTION_CAUSES = (
     ("contact stop", ("stopped on contact",)),
     ("IK no solution", ("IK:",)),
     ("no clear route in storage", ("none is taken unchecked",)),
-    ("carry would meet what stands near", ("on every route taken unchecked",)),
+    ("carry would meet what stands near", ("would carry it through",)),
     ("no idle space", ("idle spot", "no table or counter")),
     ("no handle points", ("has no handle the robot has seen", "points, need at least")),
     ("grasp closed on nothing", ("closed on nothing",)),
