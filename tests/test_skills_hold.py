@@ -11,6 +11,7 @@ import pytest
 from agent.perception.part_geometry import PartGeometry, hinge_axis
 from agent.perception.part_motion import moved_geometry
 from skills.arm.frames import base_transform
+from skills.arm.part_plans import PUSH_PAST
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError
 from worlds.commands import parse_arm_trajectory
@@ -87,3 +88,20 @@ def test_the_held_door_is_taken_as_the_hand_holds_it_not_as_it_was_meant_to_be(p
     assert np.linalg.norm(_tcp(planner, plan.steps[0].samples[0])[:3, 3] - turned.handle_point) < 0.01
     with pytest.raises(SkillPlanError, match="amount"):
         planner.plan_close_held(opened.final_q, BASE, door, 0.0)
+
+
+def test_a_held_drawer_is_pushed_on_past_where_it_was_seen_shut(planner: ArmPlanner) -> None:
+    """Occlusion 1031 and 1065 of tuning-wide: a drawer held open while the robot looked was pushed
+    back only to where it was seen shut, and stood 10-14 mm out, counted open."""
+    drawer = PartGeometry("drawer", np.array([0.45, -0.35, 0.9]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]),
+                          front_depth=0.035)
+    opened = planner.plan_open(np.array(STOWED), BASE, drawer, 0.2, hold=True)
+    plan = planner.plan_close_held(opened.final_q, BASE, drawer, 0.2)
+    _runnable(plan, opened.final_q)
+    push = plan.steps[0]
+    assert np.allclose(push.samples[0], opened.final_q, atol=0.05)
+    pushed = _tcp(planner, push.samples[-1])
+    past = PUSH_PAST["drawer"]
+    assert pushed[:3, 3] - opened.info["grasp_pose"][:3, 3] == pytest.approx(-past * drawer.normal, abs=3e-3)
+    assert push.part_motion.opening(pushed[:3, 3]) == pytest.approx(-past, abs=3e-3)
+    assert np.allclose(plan.info["release_pose"][:3, 3], pushed[:3, 3], atol=3e-3)

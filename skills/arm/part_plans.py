@@ -132,7 +132,10 @@ def plan_close_held(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: P
     """Shut a part that stands open with the hand on its handle, without a second grasp.
 
     The hand rides the handle back along the part's path from the grasp it has now (whichever
-    variant the opening took, read off ``q``), lets go and backs off as `plan_close` would.
+    variant the opening took, read off ``q``), a drawer on past where it was seen shut by
+    `PUSH_PAST` as `plan_close` pushes it (pushed only to there, drawers held open while the robot
+    looked stood 10–14 mm out, counted open: occlusion 1031 and 1065 of tuning-wide), lets go and
+    backs off as `plan_close` would.
 
     Args:
         arm: the arm planned for.
@@ -157,7 +160,7 @@ def plan_close_held(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: P
     grasp = builder.base @ arm.kin.forward(here)
     held = np.linalg.inv(grasp_pose(moved_geometry(geometry, amount))) @ grasp
     step = LINE_STEP_M if geometry.kind == "drawer" else ARC_STEP_RAD
-    values = np.linspace(0.0, float(amount), max(1, math.ceil(amount / step - 1e-9)) + 1)
+    values, shut = _pushed_past(geometry, np.linspace(0.0, float(amount), max(1, math.ceil(amount / step - 1e-9)) + 1))
     poses = [grasp_pose(moved_geometry(geometry, float(v))) @ held for v in values]
     try:
         swept = ik.path(here, poses[::-1][1:], f"closing path of {what}")
@@ -165,11 +168,18 @@ def plan_close_held(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: P
         swept = _retraced(ik, poses, what, error)
     retreat = backed_off(ik, swept[-1], poses[0], f"retreat from {what}")
     builder.move(f"push the {geometry.kind} closed", swept, careful=True, tcp_target=poses[0],
-                 part_motion=PartMotion(geometry, poses[0][:3, 3], float(amount), 0.0))
+                 part_motion=PartMotion(geometry, poses[shut][:3, 3], float(amount), 0.0))
     builder.let_go(what, retreat)
     info = {"grasp_pose": grasp, "release_pose": poses[0], "kind": geometry.kind, "start": float(amount),
             "end": 0.0, "held": True}
     return builder.finish(skill or f"close_{geometry.kind}", info, ik)
+
+
+def _pushed_past(geometry: PartGeometry, values: np.ndarray) -> tuple[np.ndarray, int]:
+    """The openings of a part's path to shut, ``values`` (from 0, as seen shut, out), led by
+    `PUSH_PAST` beyond shut where its kind has one; and the index of the opening 0 among them."""
+    past = PUSH_PAST.get(geometry.kind, 0.0)
+    return (np.r_[-past, values], 1) if past else (values, 0)
 
 
 def _retraced(ik: IKSearch, poses: list[np.ndarray], what: str, error: SkillPlanError) -> np.ndarray:
@@ -219,12 +229,10 @@ def _plan_part(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, geometry: PartGe
     step = LINE_STEP_M if geometry.kind == "drawer" else ARC_STEP_RAD
     outer = max(start, end)
     count = max(1, math.ceil(outer / step - 1e-9))
-    values = np.linspace(0.0, outer, count + 1)
-    past = PUSH_PAST.get(geometry.kind, 0.0) if not opening and end == 0.0 else 0.0
-    if past:  # shut: on past where it was seen shut, until it stops against its end
-        values = np.r_[-past, values]
+    values, shut = np.linspace(0.0, outer, count + 1), 0
+    if not opening and end == 0.0:  # shut: on past where it was seen shut, until it stops against its end
+        values, shut = _pushed_past(geometry, values)
     path = [grasp_pose(moved_geometry(geometry, float(v))) if v else grasp_pose(geometry) for v in values]
-    shut = 1 if past else 0  # the index of the pose with the part as seen shut
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
     base = base_transform(base_pose)
