@@ -776,3 +776,22 @@ def test_a_short_free_move_to_a_posture_that_touches_is_planned(planner: ArmPlan
     builder = PlanBuilder(planner, near, BASE, SURFACE, clearance)
     builder.free_move("to the pre-grasp pose of the drawer handle", goal)
     assert builder.q == pytest.approx(goal) and builder.steps[-1].samples[-1] == pytest.approx(goal, abs=1e-6)
+
+
+def test_a_way_round_from_the_stowed_pose_is_checked_from_the_ready_pose_on(planner: ArmPlanner) -> None:
+    # recursive 1108 and occlusion 1127 (tuning-wide): a way round what stands near was found from
+    # the stowed arm, but the trajectory was checked all along, the legs out of the base among it,
+    # where the folded arm grazes the margin kept over the table; it was refused, and the straight
+    # move, not clear, was taken unchecked and swept a finger into a door or a handle.
+    goal = planner.plan_open(np.array(STOWED), BASE, _drawer(height=0.9), 0.2, surface_z=SURFACE).steps[0].waypoints[-1]
+    aside = box_points(np.array([1.0, 0.3, 1.6]), np.array([0.05, 0.05, 0.05]))  # nowhere near the arm
+    clearance = Clearance(planner, base_transform(BASE), SURFACE, aside)
+    builder = PlanBuilder(planner, np.array(STOWED), BASE, SURFACE, clearance)
+    out_of_stow = builder.step("out", np.array([planner.ready]), careful=False)
+    assert clearance.path_problem(out_of_stow.samples) is not None  # the fold out of the base grazes
+    target = base_transform(BASE) @ planner.kin.forward(goal)
+    step = builder._way_round("to the goal", [np.array(STOWED), planner.ready], [goal], target, clearance)
+    assert step is not None
+    assert np.abs(step.samples[-1] - goal).max() < 1e-6
+    ready_on = step.samples[int(np.argmin(np.abs(step.samples - planner.ready).max(axis=1))):]
+    assert clearance.path_problem(ready_on, hand=True) is None

@@ -147,12 +147,14 @@ class ArmModel:
                                  "finite numbers")
         return self.kin.clip(q)
 
-    def samples(self, waypoints: np.ndarray, speed: float) -> np.ndarray:
+    def samples(self, waypoints: np.ndarray, speed: float, pass_through: bool = True) -> np.ndarray:
         """The joint samples of a move, every ``dt`` after its start, for the world's trajectory command.
 
         Args:
             waypoints: (n, dof) joint waypoints within the limits, the first where the arm is.
             speed: a fraction of the velocity limits.
+            pass_through: pass intermediate waypoints at speed (`skills.arm.trajectory`); False:
+                stop at each, so the arm keeps to the straight joint-space lines between them.
 
         Returns:
             The jerk-limited trajectory's samples, the start left out (unless it is the only one),
@@ -162,7 +164,7 @@ class ArmModel:
             ValueError: malformed waypoints.
             RuntimeError: Ruckig finds no trajectory.
         """
-        trajectory = plan_trajectory(waypoints, self.limits(speed), self.dt)
+        trajectory = plan_trajectory(waypoints, self.limits(speed), self.dt, pass_through)
         samples = trajectory.positions[1:] if len(trajectory.positions) > 1 else trajectory.positions
         return self.kin.clip(samples)
 

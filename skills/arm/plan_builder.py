@@ -59,7 +59,7 @@ class PlanBuilder:
 
     def step(self, name: str, waypoints: np.ndarray, careful: bool, stop_on_contact: bool = False,
              tcp_target: np.ndarray | None = None, part_motion: PartMotion | None = None,
-             touch: str | None = None) -> Step:
+             touch: str | None = None, pass_through: bool = True) -> Step:
         """A move from where the plan has the arm, not yet added to the plan.
 
         Args:
@@ -70,6 +70,7 @@ class PlanBuilder:
             tcp_target: where it ends the TCP (world).
             part_motion: what it does to a held part.
             touch: what the move arrives on when it is held back (`Step.touch`).
+            pass_through: pass the waypoints at speed; False: stop at each (`ArmModel.samples`).
 
         Returns:
             The timed move.
@@ -85,7 +86,7 @@ class PlanBuilder:
         waypoints = arm.kin.clip(waypoints)
         began = time.perf_counter()
         try:
-            samples = arm.samples(waypoints, speed)
+            samples = arm.samples(waypoints, speed, pass_through)
         except (RuntimeError, ValueError) as error:
             raise SkillPlanError(f"trajectory: {name}: {error}") from None
         self.trajectory_s += time.perf_counter() - began
@@ -195,8 +196,11 @@ class PlanBuilder:
         clear: the whole arm clear of it, the hand above the surface. Where the arm starts touching
         something (the door it let go of), the first `ESCAPE_RAD` of the way out are not held
         against it; with ``arriving_touched`` (the way's end touches something), nor the last
-        `ESCAPE_RAD` of the way in. None when no way is found, or the trajectory through the way's
-        waypoints strays into something."""
+        `ESCAPE_RAD` of the way in. The arm passes the way's waypoints at speed, or where that
+        strays into something off the lines between them, stops at each (recursive 1108 of
+        tuning-wide: the way round to an open door's handle was found, the trajectory passing its
+        waypoints cut through the leaf, and the move taken unchecked swept a finger into it). None
+        when no way is found, or even the trajectory stopping at each waypoint strays."""
         origin = start[-1]
 
         def valid(q: np.ndarray) -> bool:
@@ -214,9 +218,12 @@ class PlanBuilder:
         if way is None:
             return None
         way = shortcut(way, valid, rng)
-        step = self.step(name, np.array([*start[:-1], *way, *end[1:]]), careful=False, stop_on_contact=True,
-                         tcp_target=target)
-        return step if all(valid(q) for q in step.samples[::3]) else None
+        for pass_through in (True, False):
+            step = self.step(name, np.array([*start[:-1], *way, *end[1:]]), careful=False, stop_on_contact=True,
+                             tcp_target=target, pass_through=pass_through)
+            if all(valid(q) for q in self._checked(step, len(start) > 1, len(end) > 1, None)[::3]):
+                return step
+        return None
 
     def _over_the_surface(self, start: list[np.ndarray], end: list[np.ndarray]) -> list[np.ndarray]:
         """Joint routes from ``start`` to ``end``: straight, then with the lift raised on the way by
