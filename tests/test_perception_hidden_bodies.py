@@ -37,3 +37,17 @@ def test_a_front_facing_another_way_fills_behind_it_that_way() -> None:
     faces = closed_drawer_faces(front, carcass, eye=np.array([1.2, 0.0, 1.4]))
     assert faces[:, 0].max() == pytest.approx(0.5 - FACE_SPACING_M) and faces[:, 0].min() == pytest.approx(0.2, abs=FACE_SPACING_M)
     assert faces[:, 1].min() == pytest.approx(-0.18, abs=FACE_SPACING_M)
+
+
+def test_a_drawer_remembered_with_the_floor_seen_inside_it_fills_the_chest_behind_its_front() -> None:
+    # recursive 1120 (tuning-wide): looked into while open, a drawer is remembered with its floor
+    # and walls; the floor's normals outnumbered the front's, and the box was laid out turned 40°,
+    # out before the chest, over the spot a box was to be put down
+    front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
+    floor = _grid((-0.17, 0.17), (0.1, 0.37), (0.92, 0.92), step=0.005)
+    walls = np.vstack([_grid((x, x), (0.1, 0.37), (0.92, 1.05)) for x in (-0.17, 0.17)])
+    carcass = np.vstack([_grid((-0.18, -0.18), (0.09, 0.38), (0.75, 1.07)), _grid((0.18, 0.18), (0.09, 0.38), (0.75, 1.07))])
+    faces = closed_drawer_faces(np.vstack([front, floor, walls]), carcass, eye=np.array([0.0, -0.7, 1.4]))
+    assert 0.09 < faces[:, 1].min() < 0.09 + 2 * FACE_SPACING_M  # behind the front, none before it
+    assert faces[:, 1].max() == pytest.approx(0.38, abs=FACE_SPACING_M)
+    assert -0.19 < faces[:, 0].min() < faces[:, 0].max() < 0.19 and np.ptp(faces[:, 0]) > 0.3  # across the chest
