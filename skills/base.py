@@ -79,9 +79,7 @@ class SkillResult:
     rad; doors and drawers). ``planning_ms`` / ``execution_s``: wall time of planning (the plan call,
     whether it succeeded or not) and of running the steps; ``steps_done`` of ``steps``;
     ``contacts``: what the arm touched on the way; ``info``: the plan's figures (IK and trajectory
-    time, motion seconds, grasp or camera pose...; ``carried_by``: how far (world, m) the hand moved
-    an object it took hold of before it let go, as the arm really went, which differs from the plan
-    where a touch ended a move early); ``joints``: the arm's joint positions in the
+    time, motion seconds, grasp or camera pose...); ``joints``: the arm's joint positions in the
     last reply (rad or m, in the planner's ``joint_names`` order), None when no reply carried them;
     ``unplanned``: it failed because no plan was found (nothing moved), which callers tell apart
     from a move that went wrong."""
@@ -156,8 +154,6 @@ class ArmSkill(PortedSkill):
         self._index = 0
         self._last: dict[str, Any] | None = None  # the latest arm state any reply carried
         self._achieved: float | None = None
-        self._held_at: np.ndarray | None = None  # the TCP's position when the hand took hold of an object
-        self._carried_by: np.ndarray | None = None  # how far the hand moved that object before letting go
         self._contacts: list[dict[str, Any]] = []
         self._run_began: float | None = None
         self._planning_ms = 0.0
@@ -261,8 +257,6 @@ class ArmSkill(PortedSkill):
                 hold = planner.hold(self._last["q"], SETTLE_S if moved_part else 0.0)
                 return self._send(lambda: self._send_move(hold))
             self._holding_still = False
-            if step.action == "open" and self._held_at is not None and self._carried_by is None:
-                self._carried_by = self._last["tcp_pose"][:3, 3] - self._held_at
             return self._send(lambda: self._ask("gripper", {"action": step.action}))
         if step.samples is not None and np.abs(step.samples[0] - self._last["q"]).max() > RETIME_RAD:
             try:
@@ -308,8 +302,6 @@ class ArmSkill(PortedSkill):
             self._achieved = achieved
         if problem:
             return self._fail(f"{step.name}: {problem}")
-        if step.kind == "gripper" and step.action == "close" and step.expect_held == "object":
-            self._held_at = state["tcp_pose"][:3, 3].copy()
         self._index += 1
         return self._next()
 
@@ -338,8 +330,6 @@ class ArmSkill(PortedSkill):
         if plan is not None:
             info = {**plan.info, "ik_ms": plan.ik_ms, "ik_solves": plan.ik_solves,
                     "trajectory_ms": plan.trajectory_ms, "motion_s": plan.duration_s, "base_pose": plan.base_pose}
-        if self._carried_by is not None:
-            info["carried_by"] = self._carried_by
         last = self._last or {}
         return SkillResult(ok, reason, self.skill_name, last.get("held"), last.get("tcp_pose"), self._achieved,
                            self._planning_ms, execution, self._index,

@@ -155,7 +155,7 @@ class Picks:
         if not result.ok:
             out_of_reach = beyond_reach(top, (stand_x, edge_y)) if result.unplanned else ""
             return SkillResult(False, result.reason + out_of_reach)
-        place = top + _carried_by(result, np.asarray(result.info.get("place_point", places[0]), dtype=float) - top)
+        place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
         body.memory.move(obj.id, _translation(place - top))
         self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
         self.vacated[obj.id] = box
@@ -235,7 +235,7 @@ class Picks:
                           label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
                           keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:
-            body.memory.move(obj.id, _translation(_carried_by(result, away.grasp_point - now)))
+            body.memory.move(obj.id, _translation(away.grasp_point - now))
         return result
 
     def _find_again(self, obj: Instance, away: Away) -> np.ndarray | None:
@@ -308,16 +308,6 @@ def beyond_reach(point: np.ndarray, stand_xy: tuple[float, float], reach_m: floa
     if out <= reach_m:
         return ""
     return f" ({out:.2f} m from the base's axis, beyond the arm's reach over a table, {reach_m:.2f} m)"
-
-
-def _carried_by(result: ArmResult, planned: np.ndarray) -> np.ndarray:
-    """How far a pick moved the thing: as the hand really went from taking hold of it to letting
-    go, else as ``planned``. The plan moves the memory's top to its place; the hand takes hold where
-    its fingertips meet the top and lets go above the place. Moved as planned, the inner box of a
-    nest, its lower part never seen, was remembered 4 cm lower than it stood, the box seen there
-    became a second box, and the robot picked the same box away three times (recursive 1077 of
-    tuning-wide)."""
-    return np.asarray(result.info.get("carried_by", planned), dtype=float)
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:
