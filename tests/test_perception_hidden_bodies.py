@@ -13,11 +13,17 @@ def _grid(x: tuple[float, float], y: tuple[float, float], z: tuple[float, float]
     return np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 3)
 
 
-def test_a_closed_drawer_fills_the_chest_behind_its_front_from_its_bottom_to_its_top() -> None:
-    # a chest facing -y whose front stands at y = 0.09, its back at y = 0.38; the upper drawer's
-    # front spans x -0.18..0.18 and z 0.91..1.07; the camera looks from before it
+def _chest() -> tuple[np.ndarray, np.ndarray]:
+    """A chest facing -y whose front stands at y = 0.09, its back at y = 0.38: its upper drawer's
+    front (x -0.18..0.18, z 0.91..1.07) and its sides."""
     front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
-    carcass = np.vstack([_grid((-0.18, -0.18), (0.09, 0.38), (0.75, 1.07)), _grid((0.18, 0.18), (0.09, 0.38), (0.75, 1.07))])
+    sides = np.vstack([_grid((x, x), (0.09, 0.38), (0.75, 1.07)) for x in (-0.18, 0.18)])
+    return front, sides
+
+
+def test_a_closed_drawer_fills_the_chest_behind_its_front_from_its_bottom_to_its_top() -> None:
+    # the camera looks from before the chest
+    front, carcass = _chest()
     faces = closed_drawer_faces(front, carcass, eye=np.array([0.0, -0.7, 1.4]))
     assert set(np.round(faces[:, 2], 3)) == {0.91, 1.07}
     assert faces[:, 0].min() == pytest.approx(-0.18) and faces[:, 0].max() == pytest.approx(0.18, abs=FACE_SPACING_M)
@@ -25,7 +31,7 @@ def test_a_closed_drawer_fills_the_chest_behind_its_front_from_its_bottom_to_its
 
 
 def test_a_front_with_nothing_seen_behind_it_fills_nothing() -> None:
-    front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
+    front, _ = _chest()
     assert closed_drawer_faces(front, np.zeros((0, 3)), eye=np.array([0.0, -0.7, 1.4])).shape == (0, 3)
     assert closed_drawer_faces(front, front, eye=np.array([0.0, -0.7, 1.4])).shape == (0, 3)
 
@@ -43,10 +49,9 @@ def test_a_drawer_remembered_with_the_floor_seen_inside_it_fills_the_chest_behin
     # recursive 1120 (tuning-wide): looked into while open, a drawer is remembered with its floor
     # and walls; the floor's normals outnumbered the front's, and the box was laid out turned 40°,
     # out before the chest, over the spot a box was to be put down
-    front = _grid((-0.18, 0.18), (0.09, 0.09), (0.91, 1.07))
+    front, carcass = _chest()
     floor = _grid((-0.17, 0.17), (0.1, 0.37), (0.92, 0.92), step=0.005)
     walls = np.vstack([_grid((x, x), (0.1, 0.37), (0.92, 1.05)) for x in (-0.17, 0.17)])
-    carcass = np.vstack([_grid((-0.18, -0.18), (0.09, 0.38), (0.75, 1.07)), _grid((0.18, 0.18), (0.09, 0.38), (0.75, 1.07))])
     faces = closed_drawer_faces(np.vstack([front, floor, walls]), carcass, eye=np.array([0.0, -0.7, 1.4]))
     assert 0.09 < faces[:, 1].min() < 0.09 + 2 * FACE_SPACING_M  # behind the front, none before it
     assert faces[:, 1].max() == pytest.approx(0.38, abs=FACE_SPACING_M)
