@@ -144,6 +144,7 @@ def stop_workers(pool: ProcessPoolExecutor, grace_s: float = 5.0) -> None:
     """
     # the executor offers no other way to end a call; read them first: shutdown forgets them
     processes = list((pool._processes or {}).values())
+    manager = pool._executor_manager_thread
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         process.terminate()
@@ -152,3 +153,8 @@ def stop_workers(pool: ProcessPoolExecutor, grace_s: float = 5.0) -> None:
         process.join(max(0.0, deadline - time.monotonic()))
         if process.is_alive():
             process.kill()
+    if manager is not None:
+        # The pool's manager thread closes its wake-up pipe once it sees its workers gone. Let it
+        # finish: the executor's exit hook writes to that pipe unlocked, and if it runs while the
+        # thread closes it, the command's exit after Ctrl-C prints "Bad file descriptor".
+        manager.join(grace_s)
