@@ -5,8 +5,9 @@ Each call is one task that declares the CPUs it uses, so that Ray runs no more o
 than it has room for, and that Ray runs again, up to `MAX_RETRIES` times, when the worker process
 or the node running it dies (an exception the call raises is not retried: it is the call's
 result). The caller gets each result as it finishes; once it stops early (Ctrl-C, an error, or
-simply not asking for more) the tasks not finished are cancelled, their workers killed, and a
-cluster started here is shut down, so that nothing is left running.
+simply not asking for more) a cluster started here is shut down, its workers with it, and on a
+cluster joined the tasks not finished are cancelled and their workers killed, so that nothing is
+left running.
 
 The function and its arguments travel by reference and by pickle: each node must have the same
 homebot installed (docs/scale.md), and a task that needs a file (a model, a Zenoh configuration)
@@ -82,7 +83,7 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
     """
     if slots is not None and not slots:
         raise ValueError("slots: none given, so no call could run")
-    with cluster(address, math.ceil(workers * cpus)) as ray:
+    with cluster(address, math.ceil(workers * cpus)) as (ray, started_here):
         remote = ray.remote(function).options(num_cpus=cpus, max_retries=MAX_RETRIES, retry_exceptions=False)
         waiting, free = list(calls), list(slots) if slots is not None else None
         pending: dict[Any, tuple[tuple[Any, ...], Any]] = {}
@@ -99,12 +100,18 @@ def as_finished(function: Callable[..., Result], calls: Sequence[tuple[Any, ...]
                         free.append(slot)
                     yield arguments, result
         finally:
-            for ref in pending:  # stopped early: nothing goes on running for results no one will read
-                ray.cancel(ref, force=True)
+            # Stopped early: nothing goes on running for results no one will read. A cluster started
+            # here ends with its shutdown; its tasks are not cancelled first, because Ray's driver
+            # aborts when a forced cancel meets the reply of a task that just ended (its check "Tried
+            # to complete task that was not pending"), as a Ctrl-C makes likely: the terminal's
+            # SIGINT reaches this cluster's workers too, and ends their tasks at the same moment.
+            if not started_here:
+                for ref in pending:
+                    ray.cancel(ref, force=True)
 
 
 @contextmanager
-def cluster(address: str, cpus: int) -> Iterator[ModuleType]:
+def cluster(address: str, cpus: int) -> Iterator[tuple[ModuleType, bool]]:
     """In a Ray cluster: a local one of ``cpus`` CPUs started here (`LOCAL`), shut down at the end,
     or the one at ``address``, left at the end; a cluster this process is in already is used as
     it is, and left as it is.
@@ -117,14 +124,14 @@ def cluster(address: str, cpus: int) -> Iterator[ModuleType]:
         cpus: the CPUs of a cluster started here.
 
     Yields:
-        The ray module, connected.
+        The ray module, connected, and whether the cluster was started here (and ends on leaving).
 
     Raises:
         RayError: Ray is missing, or the cluster cannot be started or joined.
     """
     ray = ray_module()
     if ray.is_initialized():
-        yield ray
+        yield ray, False
         return
     options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False, "logging_level": logging.ERROR}
     try:
@@ -137,7 +144,7 @@ def cluster(address: str, cpus: int) -> Iterator[ModuleType]:
                  else f"no Ray cluster joined at {address}")
         raise RayError(f"--ray: {where}: {error}") from None
     try:
-        yield ray
+        yield ray, address == LOCAL
     finally:
         ray.shutdown()
 
