@@ -44,3 +44,11 @@ def test_a_straight_way_is_taken_as_it_is_and_a_walled_in_goal_is_refused() -> N
     boxed = connect(np.array([-0.8, -0.8]), np.array([0.8, -0.8]), lambda q: abs(q[0]) >= 0.1, LOWER, UPPER,
                     np.random.default_rng(0), max_samples=50)
     assert boxed is None  # a wall from edge to edge: no way at all
+
+
+def test_an_edge_is_checked_finely_enough_not_to_step_over_what_is_as_thin_as_the_margin() -> None:
+    # a band 12 mrad wide (1 cm at the hand, 0.85 m out) across the way, off the 0.04 rad grid
+    def outside_band(q: np.ndarray) -> bool:
+        return not 0.045 < q[0] < 0.057
+
+    assert not edge_clear(np.zeros(2), np.array([0.4, 0.0]), outside_band)
