@@ -363,6 +363,31 @@ def test_the_rule_verifier_names_no_obstacle_only_grazing_what_a_drawer_sweeps()
     assert verified(0.361) == ["o4"]
 
 
+def test_the_rule_verifier_judges_by_the_box_seen_not_by_one_laid_about_the_mean_of_its_points() -> None:
+    """A bottle under a drawer, seen mostly from above: the mean of its points stood 1.9 cm over
+    its middle, and a box of its size laid about that mean reached 1 cm into what the
+    drawer sweeps (occlusion 1156 of tuning-wide); the box seen stops short of it."""
+    from agent.acsg.graph import ACSG
+    from agent.acsg.interfaces import Detection
+
+    g = ACSG()
+    for node_id, label in (("o0", "table"), ("o2", "nightstand"), ("o3", "drawer"), ("o4", "bottle")):
+        g.add_object(node_id, label)
+    g.add_edge("o2", "o3", relation="belongs")
+    g.add_edge("o0", "o4", relation="on")
+    opening = g.add_action("open:3", "open", "o3", "open_drawer")
+    drawer = Detection("3", "drawer", "2", "belongs", hints={"swept": ((0.07, -0.25, 1.015), (0.57, 0.04, 1.195))})
+    seen = {"centroid": np.array([0.474, -0.212, 0.899]), "extent": np.array([0.09, 0.09, 0.27])}
+
+    def verified(**hints: object) -> list[str]:
+        bottle = Detection("4", "bottle", "0", "on", hints=hints, **seen)
+        return RuleDecisionModule().verify(opening, DecisionContext(g, {"o3": drawer, "o4": bottle}))
+
+    assert verified(box=((0.429, -0.257, 0.745), (0.519, -0.167, 1.015))) == []
+    assert verified(box=((0.429, -0.257, 0.775), (0.519, -0.167, 1.045))) == ["o4"]
+    assert verified() == ["o4"]  # without the box seen, the extent about the centroid, as before
+
+
 # ---- every ground-truth scene ----------------------------------------------------------------------
 
 def test_exploring_every_tabletop_scene_recovers_its_ground_truth() -> None:
