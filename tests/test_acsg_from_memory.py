@@ -56,13 +56,6 @@ def test_relations_follow_the_scene(detections) -> None:
     assert all(h.relation == "belongs" for h in handles)
 
 
-def test_each_detection_carries_the_box_around_what_was_seen_of_it(detections) -> None:
-    for detection in (d for found in detections.values() for d in found):
-        lo, hi = (np.asarray(v) for v in detection.hints["box"])
-        assert np.allclose(hi - lo, detection.extent, atol=1e-3)
-        assert np.all(lo < detection.centroid) and np.all(detection.centroid < hi)
-
-
 def test_the_bottle_in_the_door_swing_overlaps_its_swept_box_and_the_book_does_not(detections) -> None:
     lo, hi = (np.asarray(v) for v in _one(detections, "door").hints["swept"])
 

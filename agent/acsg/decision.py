@@ -152,26 +152,12 @@ class RuleDecisionModule:
             named = det.hints.get("blocks", ())
             if target.id in named or (target.instance is not None and target.instance in named):
                 blockers.append(det.id)
-            elif swept is not None and (box := _box(det)) is not None:
+            elif swept is not None and det.centroid is not None and det.extent is not None:
                 lo, hi = (np.asarray(v, dtype=float) for v in swept)
-                if _boxes_overlap(*box, lo, hi, self.sweep_margin_m):
+                if _boxes_overlap(det.centroid - det.extent / 2, det.centroid + det.extent / 2, lo, hi,
+                                  self.sweep_margin_m):
                     blockers.append(det.id)
         return blockers
-
-
-def _box(det: Detection) -> tuple[np.ndarray, np.ndarray] | None:
-    """(lo, hi) corners of what was seen of ``det``: its ``box`` hint, else its extent about its
-    centroid. A memory's centroid is the mean of its points, which crowd where the camera sees
-    most: a bottle seen from above had the mean of its points 1.9 cm over its middle, the box laid
-    about that mean reached into what the drawer over it sweeps, and the bottle was taken out of
-    the drawer's way a second time, a precondition the scene does not have (occlusion 1156 of
-    tuning-wide)."""
-    if "box" in det.hints:
-        lo, hi = det.hints["box"]
-        return np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    if det.centroid is None or det.extent is None:
-        return None
-    return det.centroid - det.extent / 2, det.centroid + det.extent / 2
 
 
 # The paper's Fig. 7 prompts (identical in the authors' released prompt files).

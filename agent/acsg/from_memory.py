@@ -43,8 +43,7 @@ INSIDE_MARGIN_M = 0.01
 
 def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pull_m: float = 0.25,
                       vacated: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None) -> list[Detection]:
-    """One detection per live remembered instance, with its relation, the box around its voxels
-    (``box`` hint) and, for parts, their swept box.
+    """One detection per live remembered instance, with its relation and, for parts, their swept box.
 
     ``toward`` is where the robot looks from (the camera position), which orients front normals.
     ``vacated``: instance id -> the (lo, hi) box it filled before it was moved away.
@@ -67,10 +66,7 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
     detections = []
     for inst in live:
         parent, relation = _relation(inst, live, by_id, boxes, vacated or {})
-        lo, hi = inst.bounds
-        hints: dict[str, Any] = {"box": (lo.round(4).tolist(), hi.round(4).tolist())}
-        if inst.id in absorbed:
-            hints["absorbed"] = tuple(absorbed[inst.id])
+        hints: dict[str, Any] = {"absorbed": tuple(absorbed[inst.id])} if inst.id in absorbed else {}
         if inst.label in PARTS:
             swept = _swept_box(memory, inst, by_id, np.asarray(toward, dtype=float), drawer_pull_m)
             if swept is not None:
