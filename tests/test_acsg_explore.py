@@ -339,28 +339,47 @@ def test_the_rule_verifier_never_names_furniture_as_an_obstacle() -> None:
     assert RuleDecisionModule().verify(opening, DecisionContext(g, visible)) == ["o4"]
 
 
-def test_the_rule_verifier_names_no_obstacle_only_grazing_what_a_drawer_sweeps() -> None:
-    """A box beside a chest, its remembered box 7 mm into the sweep (recursive 1087 of tuning-wide),
-    is not in the way; one reaching 3 cm into it is."""
+def _drawer_beside(piece: str, thing: Detection, swept: tuple) -> list[str]:
+    """What the rule verifier names in the way of opening the drawer (o3) of ``piece`` (o2), which
+    sweeps ``swept``, with ``thing`` (o4) standing on the table (o0)."""
     from agent.acsg.graph import ACSG
-    from agent.acsg.interfaces import Detection
 
     g = ACSG()
-    for node_id, label in (("o0", "table"), ("o2", "drawer chest"), ("o3", "drawer"), ("o4", "box")):
+    for node_id, label in (("o0", "table"), ("o2", piece), ("o3", "drawer"), ("o4", thing.label)):
         g.add_object(node_id, label)
     g.add_edge("o2", "o3", relation="belongs")
     g.add_edge("o0", "o4", relation="on")
     opening = g.add_action("open:3", "open", "o3", "open_drawer")
-    swept = ((-0.03, -0.17, 0.75), (0.391, 0.11, 0.91))
-    extent = np.array([0.26, 0.33, 0.09])
+    drawer = Detection("3", "drawer", "2", "belongs", hints={"swept": swept})
+    return RuleDecisionModule().verify(opening, DecisionContext(g, {"o3": drawer, "o4": thing}))
+
+
+def test_the_rule_verifier_names_no_obstacle_only_grazing_what_a_drawer_sweeps() -> None:
+    """A box beside a chest, its remembered box 7 mm into the sweep (recursive 1087 of tuning-wide),
+    is not in the way; one reaching 3 cm into it is."""
 
     def verified(left_edge: float) -> list[str]:
-        box = Detection("4", "box", "0", "on", centroid=np.array([left_edge + 0.13, -0.218, 0.819]), extent=extent)
-        return RuleDecisionModule().verify(opening, DecisionContext(g, {"o3": Detection(
-            "3", "drawer", "2", "belongs", hints={"swept": swept}), "o4": box}))
+        box = Detection("4", "box", "0", "on", centroid=np.array([left_edge + 0.13, -0.218, 0.819]),
+                        extent=np.array([0.26, 0.33, 0.09]))
+        return _drawer_beside("drawer chest", box, ((-0.03, -0.17, 0.75), (0.391, 0.11, 0.91)))
 
     assert verified(0.384) == []
     assert verified(0.361) == ["o4"]
+
+
+def test_the_rule_verifier_judges_by_the_box_seen_not_by_one_laid_about_the_mean_of_its_points() -> None:
+    """A bottle under a drawer, seen mostly from above: the mean of its points stood 1.9 cm over
+    its middle, and a box of its size laid about that mean reached 1 cm into what the
+    drawer sweeps (occlusion 1156 of tuning-wide); the box seen stops short of it."""
+
+    def verified(**hints: object) -> list[str]:
+        bottle = Detection("4", "bottle", "0", "on", centroid=np.array([0.474, -0.212, 0.899]),
+                           extent=np.array([0.09, 0.09, 0.27]), hints=hints)
+        return _drawer_beside("nightstand", bottle, ((0.07, -0.25, 1.015), (0.57, 0.04, 1.195)))
+
+    assert verified(box=((0.429, -0.257, 0.745), (0.519, -0.167, 1.015))) == []
+    assert verified(box=((0.429, -0.257, 0.775), (0.519, -0.167, 1.045))) == ["o4"]
+    assert verified() == ["o4"]  # without the box seen, the extent about the centroid, as before
 
 
 # ---- every ground-truth scene ----------------------------------------------------------------------

@@ -38,9 +38,11 @@ class Detection:
 
     ``parent`` and ``relation`` are the spatial hint behind an object-object edge (Algorithm 2):
     the instance this one belongs to, stands on or lies inside. ``hints`` carry geometry the
-    verifier may use: ``blocks`` (instances of parts whose motion this object is in the way of)
-    or ``swept`` ((lo, hi) corners of the box a part sweeps when it opens); and ``absorbed``,
-    instances the perception has since found to be this one (two views of one mug it first took
+    verifier may use: ``blocks`` (instances of parts whose motion this object is in the way of),
+    ``swept`` ((lo, hi) corners of the box, or (N, 3) corners of the boxes, holding what a part
+    sweeps when it opens) or ``box`` ((lo, hi) corners of the box around what was seen of it, where
+    ``centroid`` is the mean of its points and not that box's middle); and ``absorbed``, instances
+    the perception has since found to be this one (two views of one mug it first took
     for two things), which the explorer folds into this one's node.
     """
 
