@@ -57,7 +57,7 @@ def matryoshka() -> SymbolicScene:
     ])
 
 
-def cabinet_behind_bottle(jar: str | None = None, bottle_pickable: bool = True) -> SymbolicScene:
+def cabinet_behind_bottle(jar: str | None = None) -> SymbolicScene:
     """A bottle in the door's swing, an apple inside; ``jar`` "blocking" or "aside" adds a jar."""
     things = [
         Thing("1", "table"),
@@ -65,7 +65,7 @@ def cabinet_behind_bottle(jar: str | None = None, bottle_pickable: bool = True) 
         Thing("3", "door", "2", "belongs", part="door"),
         Thing("4", "handle", "3", "belongs"),
         Thing("6", "apple", "2", "inside", (0.0, 0.2, 0.8), hidden_by=("3",), pickable=True),
-        Thing("5", "bottle", "1", "on", (0.1, -0.1, 0.85), blocks=("3",), pickable=bottle_pickable),
+        Thing("5", "bottle", "1", "on", (0.1, -0.1, 0.85), blocks=("3",), pickable=True),
     ]
     if jar is not None:
         blocks = ("3",) if jar == "blocking" else ()
@@ -129,17 +129,6 @@ def test_a_box_in_a_drawer_is_lifted_and_put_back_before_the_drawer_closes() -> 
     assert result.steps() == ["open_drawer o3", "pick_away o5", "pick_back o5", "close_drawer o3",
                               "open_drawer o4", "close_drawer o4"]
     assert retrieval_plan(result.graph, "soap") == ["open drawer (o3)", "pick away box (o5)", "pick soap (o6)"]
-
-
-def test_a_door_whose_blocker_could_not_be_moved_is_not_opened_into_it() -> None:
-    """The bottle in the door's swing cannot be picked away: the door is left shut (opened into
-    the bottle it stops there, or knocks it over), and the scene stays as it was."""
-    scene = cabinet_behind_bottle(bottle_pickable=False)
-    result = Recorder(scene).run()
-    assert result.steps() == ["pick_away o5"] and not result.log[0].ok
-    assert result.graph.action("open:3").state == "failed"
-    assert "open:3 not tried: its precondition pick:5 failed" in result.notes
-    assert result.returned_to_start and scene.part_states() == scene.start_part_states()
 
 
 def test_without_the_verifier_the_blocked_door_fails_and_nothing_needs_undoing() -> None:

@@ -28,9 +28,7 @@ pick_back sits right under the open; splitting the two keeps the same nesting.)
 
 Objects seen in one observation are explored in the order perceived: their pairs are pushed in
 reverse so the first object's action runs first. A failed action is marked failed and its undo
-is dropped (nothing to undo); a failed undo leaves the scene changed and says so in the notes. An
-action whose precondition failed is not tried: it is marked failed, its undo dropped, and the notes
-say why; what was moved away for it before is put back as ever.
+is dropped (nothing to undo); a failed undo leaves the scene changed and says so in the notes.
 """
 
 from __future__ import annotations
@@ -169,9 +167,6 @@ class Explorer:
                 if blockers:
                     self._add_preconditions(entry, action, blockers)
                     continue
-            if not entry.undo and (failed := self._failed_precondition(action)) is not None:
-                self._leave_blocked(action, failed)
-                continue
             self._execute(entry, action)
         return ExplorationResult(
             graph=self.graph, log=tuple(self.log), unexplored=frozenset(self.unexplored),
@@ -336,23 +331,6 @@ class Explorer:
             self.stack.append(undo)
         self.stack.append(entry)
         self.stack.extend(_Entry(p.id, undo=False) for p in reversed(picks))
-
-    def _failed_precondition(self, action: ActionNode) -> str | None:
-        """The first precondition of ``action`` that failed (what it was to move away still
-        stands in the way), or None."""
-        for source in self.graph.predecessors(action.id, "action-action"):
-            edge = self.graph.edge(source, action.id)
-            if edge is not None and edge.relation == "precondition" and self.graph.action(source).state == "failed":
-                return source
-        return None
-
-    def _leave_blocked(self, action: ActionNode, failed: str) -> None:
-        """Leave ``action`` undone, as failed, where its precondition ``failed`` did: a door
-        swung into the bottle left in its way stops there, or knocks it over, and cannot always be
-        shut again (occlusion 1278 of tuning-wide: left 0.58 rad open)."""
-        action.state = "failed"
-        self._drop_undo(action.id)
-        self.notes.append(f"{action.id} not tried: its precondition {failed} failed")
 
     # ---- action --------------------------------------------------------------------------------
     def _execute(self, entry: _Entry, action: ActionNode) -> None:
