@@ -110,6 +110,16 @@ class DoorsAndDrawers:
         memory = self.body.memory
         return {memory.get(part_id).id for part_id in self.shut} - set(self.opened)
 
+    def open_parts(self) -> dict[int, tuple[PartGeometry, float]]:
+        """The doors and drawers this robot opened and has not shut again, by their memory ids now:
+        each one's geometry as seen closed and how far it stands open.
+
+        Returns:
+            Memory id -> (geometry, opening).
+        """
+        memory = self.body.memory
+        return {memory.get(part_id).id: (opened.geometry, opened.amount) for part_id, opened in self.opened.items()}
+
     def standing_open(self) -> list[np.ndarray]:
         """Where the doors and drawers this robot opened and has not shut again stand now: their
         points in the memory, which each skill that moved them carried along.

@@ -128,7 +128,7 @@ class Picks:
         def beyond_strip(places: np.ndarray) -> np.ndarray:
             return reachable(places) & (places[:, 1] - edge_y >= body.head_sees_from)
 
-        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with())
+        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
         if under_a_board(top, extent, keep_off):  # out of storage: not down in its way out
             obstacles.append(way_out(top, radius, body.home[:2], surface_top(surface) + LANE_ABOVE_M))

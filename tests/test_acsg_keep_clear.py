@@ -82,3 +82,29 @@ def test_the_lane_to_an_open_door_s_handle_runs_the_way_the_handle_faces(hinge: 
         for out in (0.05, 0.1, LANE_LEAST_M - LANE_STEP_M):
             gap = np.linalg.norm(kept - (handle_open + out * facing), axis=1).min()
             assert gap < 0.04, (robot, out, gap)
+
+
+def test_a_door_standing_open_keeps_clear_the_way_it_shuts() -> None:
+    # The skill that opened the door carried its points along in the memory; swept on from there,
+    # the way back to closed was left free, and a box out of the cabinet was put down in it: the
+    # door stopped on it when it was closed (recursive 1227 of tuning-wide).
+    cabinet = storage(10, "cabinet", (-0.2, 0.2), (0.23, 0.53), (0.75, 1.1),
+                      (Front("door", (-0.198, 0.198), (0.77, 1.08), hinge="left"),))
+    table = Box.at(1, "table", (0.0, 0.1, 0.73), (1.6, 0.9, 0.04))
+    memory = InstanceMemory()
+    pose = look_at(EYE, (0.0, 0.3, 0.9))
+    memory.integrate_frame(*render([table, *cabinet], pose), INTRINSICS, pose)
+    handle, = memory.with_label("handle")
+    door = memory.get(handle.parent)
+    geometry = handle_geometry(memory, handle.id, EYE, kind="door")
+    opening = DEFAULT_AMOUNT["door"]
+    memory.move(door.id, part_motion(geometry, opening))
+    halfway = part_motion(geometry, opening / 2)
+    on_the_way = halfway[:3, :3] @ geometry.handle_point + halfway[:3, 3]  # the handle, half shut
+
+    def gap(kept: list[np.ndarray]) -> float:
+        return float(np.linalg.norm(np.vstack(kept) - on_the_way, axis=1).min())
+
+    robot = np.array([0.0, -0.9])
+    assert gap(kept_clear(memory, EYE, robot, standing_open={door.id: (geometry, opening)})) < 0.03
+    assert gap(kept_clear(memory, EYE, robot)) > 0.1  # read off where it stands open

@@ -8,13 +8,13 @@ keep away from.
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Mapping
 
 import numpy as np
 
 from agent.perception.directions import GeometryError
 from agent.perception.memory import InstanceMemory
-from agent.perception.part_geometry import handle_geometry
+from agent.perception.part_geometry import PartGeometry, handle_geometry
 from agent.perception.part_motion import DEFAULT_AMOUNT, part_motion
 
 
@@ -34,7 +34,8 @@ OPENINGS_SAMPLED, LANE_STEP_M = 6, 0.05
 
 
 def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
-               done_with: Collection[int] = ()) -> list[np.ndarray]:
+               done_with: Collection[int] = (),
+               standing_open: Mapping[int, tuple[PartGeometry, float]] | None = None) -> list[np.ndarray]:
     """Point sets (each (N, 3)) of the space every remembered door and drawer with a handle sweeps as
     the skills open it (`DEFAULT_AMOUNT`), and of the lanes its handle is reached along, shut and
     open (a door is closed again from where it stands open): from the handle out the way it faces
@@ -43,11 +44,19 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
     fronts). A part whose geometry cannot be read is left out, and so are the parts ``done_with``:
     opened and shut again, never to be reached for again, their space is the table's like the rest.
 
+    A part standing open (``standing_open``) is where the skill that opened it left it in the
+    memory; its sweep is the way back to closed, from the geometry seen closed. Read off its open
+    points, it would be swept on from there, and the way it shuts left free: a box out of a
+    cabinet was put down in the closing door's way, and the door stopped on it (recursive 1227 of
+    tuning-wide).
+
     Args:
         memory: the remembered instances.
         eye: where the parts were seen from.
         robot_xy: where the robot stands.
         done_with: the memory ids of parts that will not be opened again.
+        standing_open: memory id -> (geometry seen closed, how far it stands open) of the parts
+            standing open.
 
     Returns:
         The point sets.
@@ -57,13 +66,20 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
         if handle.parent is None or memory.get(handle.parent).id in done_with:
             continue
         part = memory.get(handle.parent)
-        try:
-            geometry = handle_geometry(memory, handle.id, eye, kind=part.label)
-        except GeometryError:
-            continue
-        points = part.points()
+        opened = (standing_open or {}).get(part.id)
+        if opened is not None:
+            geometry, widest = opened
+            back = np.linalg.inv(part_motion(geometry, widest))
+            points = part.points() @ back[:3, :3].T + back[:3, 3]
+            widest = max(widest, DEFAULT_AMOUNT[geometry.kind])
+        else:
+            try:
+                geometry = handle_geometry(memory, handle.id, eye, kind=part.label)
+            except GeometryError:
+                continue
+            points, widest = part.points(), DEFAULT_AMOUNT[geometry.kind]
         offsets = np.arange(-LANE_HALF_WIDTH_M, LANE_HALF_WIDTH_M + 1e-9, LANE_STEP_M)
-        for amount in np.linspace(0.0, DEFAULT_AMOUNT[geometry.kind], OPENINGS_SAMPLED):
+        for amount in np.linspace(0.0, widest, OPENINGS_SAMPLED):
             motion = part_motion(geometry, float(amount))
             kept.append(points @ motion[:3, :3].T + motion[:3, 3])
             handle_at = motion[:3, :3] @ geometry.handle_point + motion[:3, 3]
