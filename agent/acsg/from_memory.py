@@ -33,6 +33,7 @@ from agent.perception.directions import GeometryError
 from agent.perception.instances import Instance, family_bounds
 from agent.perception.memory import InstanceMemory
 from agent.perception.part_geometry import handle_geometry
+from agent.perception.part_motion import rotation_about
 
 PARTS = ("door", "drawer")
 HANDLE = "handle"
@@ -85,7 +86,7 @@ def memory_detections(memory: InstanceMemory, toward: Sequence[float], drawer_pu
             hints["absorbed"] = tuple(absorbed[inst.id])
         if inst.label in PARTS:
             swept = _swept_boxes(memory, inst, by_id, np.asarray(toward, dtype=float), drawer_pull_m,
-                               door_swing_rad)
+                                 door_swing_rad)
             if swept is not None:
                 hints["swept"] = swept
         detections.append(Detection(str(inst.id), inst.label, None if parent is None else str(parent), relation,
@@ -143,7 +144,7 @@ def _volume(box: Box) -> float:
 
 
 def _swept_boxes(memory: InstanceMemory, part: Instance, by_id: dict[int, Instance], toward: np.ndarray,
-               drawer_pull_m: float, door_swing_rad: float) -> tuple[list, list] | None:
+                 drawer_pull_m: float, door_swing_rad: float) -> tuple[list, list] | None:
     """(lo, hi) corners of the boxes whose union holds what the part passes through when it opens,
     or None without a handle or where its geometry cannot be told: for a drawer, its front's box
     and that box pulled out (one box, corners (3,)); for a door, its front's and its handle's cells
@@ -195,9 +196,7 @@ def door_sweep(box: Box, hinge_point: np.ndarray, hinge_axis: np.ndarray, upto_r
     corners = np.array([[x, y, z] for xs in cells[0] for ys in cells[1] for zs in cells[2]
                         for x in xs for y in ys for z in zs]).reshape(-1, 8, 3)
     arms = corners - hinge_point
-    along, across = arms @ k, np.cross(k, arms)
-    angles = np.linspace(0.0, upto_rad, steps + 1)
-    turned = np.stack([arms * np.cos(a) + across * np.sin(a) + along[..., None] * k * (1.0 - np.cos(a))
-                       for a in angles]) + hinge_point  # (angles, cells, 8, 3)
+    turned = np.stack([arms @ rotation_about(k, a).T for a in np.linspace(0.0, upto_rad, steps + 1)]) \
+        + hinge_point  # (angles, cells, 8, 3)
     pairs = np.concatenate([turned[:-1], turned[1:]], axis=2)  # each cell between consecutive angles
     return pairs.min(axis=2).reshape(-1, 3), pairs.max(axis=2).reshape(-1, 3)

@@ -42,8 +42,8 @@ class Detection:
     ``swept`` ((lo, hi) corners of the box, or (N, 3) corners of the boxes, holding what a part
     sweeps when it opens) or ``box`` ((lo, hi) corners of the box around what was seen of it, where
     ``centroid`` is the mean of its points and not that box's middle); and ``absorbed``, instances
-    the perception has since found to be this one (two views of one mug it first took
-    for two things), which the explorer folds into this one's node.
+    the perception has since found to be this one (two views of one mug it first took for two
+    things), which the explorer folds into this one's node.
     """
 
     instance: str

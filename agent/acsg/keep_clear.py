@@ -68,10 +68,10 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
         part = memory.get(handle.parent)
         opened = (standing_open or {}).get(part.id)
         if opened is not None:
-            geometry, widest = opened
-            back = np.linalg.inv(part_motion(geometry, widest))
+            geometry, open_by = opened
+            back = np.linalg.inv(part_motion(geometry, open_by))
             points = part.points() @ back[:3, :3].T + back[:3, 3]
-            widest = max(widest, DEFAULT_AMOUNT[geometry.kind])
+            widest = max(open_by, DEFAULT_AMOUNT[geometry.kind])
         else:
             try:
                 geometry = handle_geometry(memory, handle.id, eye, kind=part.label)
