@@ -156,7 +156,7 @@ class Picks:
             out_of_reach = beyond_reach(top, (stand_x, edge_y)) if result.unplanned else ""
             return SkillResult(False, result.reason + out_of_reach)
         place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
-        body.memory.move(obj.id, _translation(place - top))
+        body.memory.move(obj.id, _translation(place - top), carried=True)
         self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
         self.vacated[obj.id] = box
         return SkillResult(True)
@@ -235,7 +235,7 @@ class Picks:
                           label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
                           keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:
-            body.memory.move(obj.id, _translation(away.grasp_point - now))
+            body.memory.move(obj.id, _translation(away.grasp_point - now), carried=True)
         return result
 
     def _find_again(self, obj: Instance, away: Away) -> np.ndarray | None:

@@ -69,6 +69,7 @@ class Instance:
     ``keys``/``hits``: its voxels (sorted packed keys, `agent.perception.voxels`) and how many pixels
     have fallen in each over all frames. ``hint``: the segmentation id it had when last seen (a
     per-frame id, not an identity). Frames are numbered by `InstanceMemory.integrate` from 0.
+    ``moved_to``: see `InstanceMemory.move`.
     """
 
     id: int
@@ -85,6 +86,9 @@ class Instance:
     children: list[int] = field(default_factory=list)
     gone: bool = False
     gone_frame: int | None = None
+    #: (2, 2) the (x, y) box a caller carried the instance to (`InstanceMemory.move`), until it is
+    #: seen again: where a detection of its label stands, it is this thing.
+    moved_to: np.ndarray | None = None
 
     @property
     def voxel_count(self) -> int:

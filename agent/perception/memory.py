@@ -8,7 +8,7 @@ longer there are forgotten (`agent.perception.staleness`); an instance left with
 marked gone. A thing that moved reappears as a new instance wherever it no longer overlaps its old
 voxels (a cup picked away); the memory does not guess that it is the same thing, and a caller that
 knows (the skill that moved it) says so with `InstanceMemory.merge` or, beforehand,
-`InstanceMemory.move`. A door swung open usually keeps its identity by itself: the strip along its
+`InstanceMemory.move`, which for a thing carried also says where it now stands. A door swung open usually keeps its identity by itself: the strip along its
 hinge is hidden behind the open door, not stale, and the open door overlaps it. Parts (handles,
 doors, drawers) are attached to a parent (`agent.perception.part_parents`).
 """
@@ -25,10 +25,14 @@ from scipy.spatial import cKDTree
 from agent.mapping.camera import Intrinsics
 from agent.perception.frames import Detection, check_frame, check_labels, detect, frame_labels
 from agent.perception.instances import FrameUpdate, Instance, MemoryConfig, family_bounds
-from agent.perception.overlap import overlap
+from agent.perception.overlap import box_of, overlap
 from agent.perception.part_parents import attach_parts, set_parent
 from agent.perception.staleness import DepthView, depth_view, stale_voxels
 from agent.perception.voxels import centres, pack, union, voxel_indices
+
+#: A detection matching nothing is a thing a caller moved (`InstanceMemory.move`) and has not seen
+#: since where it covers this share of the smaller of its footprint and the one the thing was moved to.
+MOVED_SHARE = 0.5
 
 
 class InstanceMemory:
@@ -137,6 +141,13 @@ class InstanceMemory:
         created, updated, absorbed = [], [], {}
         for detection in detections:
             matches = self._matches(detection)
+            moved = None if matches else self._moved_here(detection)
+            if moved is not None:  # its voxels were the caller's guess, and the view disagrees
+                moved.keys, moved.hits = moved.keys[:0], moved.hits[:0]
+                if moved.gone:
+                    self._revive(moved)
+                    gone.remove(moved.id)
+                matches = [moved.id]
             if not matches:
                 created.append(self._create(detection).id)
                 continue
@@ -194,12 +205,16 @@ class InstanceMemory:
         self._absorb_instance(target, absorbed)
         target.last_seen = max(target.last_seen, absorbed.last_seen)
         if was_gone and len(target.keys):
-            target.gone, target.gone_frame = False, None
-            if target.parent is not None and target.parent in self.instances:
-                set_parent(self.instances, target, target.parent)
+            self._revive(target)
         return target
 
-    def move(self, instance_id: int, motion: np.ndarray) -> list[int]:
+    def _revive(self, inst: Instance) -> None:
+        """Mark a gone ``inst`` live again, back among its parent's children."""
+        inst.gone, inst.gone_frame = False, None
+        if inst.parent is not None and inst.parent in self.instances:
+            set_parent(self.instances, inst, inst.parent)
+
+    def move(self, instance_id: int, motion: np.ndarray, carried: bool = False) -> list[int]:
         """Carry an instance and its parts (children, recursively) by a rigid motion.
 
         For the caller that moved the thing and knows how (a skill that pulled a drawer out by
@@ -210,6 +225,10 @@ class InstanceMemory:
         Args:
             instance_id: the instance moved.
             motion: 4x4 world-frame transform, applied on the left.
+            carried: the thing was lifted, carried and put down (not slid or turned on a joint,
+                where it stays one with its piece): until it is seen again, a detection of its
+                label standing where it was put is it, however far the motion, as the caller
+                guessed it, left its voxels from it (`_moved_here`).
 
         Returns:
             The ids moved.
@@ -220,7 +239,8 @@ class InstanceMemory:
         motion = np.asarray(motion, dtype=float)
         if motion.shape != (4, 4) or not np.all(np.isfinite(motion)):
             raise ValueError(f"motion: a finite 4x4 transform is needed, got shape {motion.shape}")
-        moved, todo = [], [self.get(instance_id).id]
+        root = self.get(instance_id)
+        moved, todo = [], [root.id]
         while todo:
             inst = self.instances[todo.pop()]
             if inst.id in moved:
@@ -232,6 +252,9 @@ class InstanceMemory:
                 inst.hits = np.bincount(inverse, weights=inst.hits, minlength=len(keys)).astype(np.int32)
             moved.append(inst.id)
             todo.extend(c for c in inst.children if c in self.instances)
+        if carried and len(root.keys):
+            lo, hi = root.bounds
+            root.moved_to = np.array([lo[:2], hi[:2]])
         return moved
 
     # --- stale voxels ------------------------------------------------------------------------
@@ -274,6 +297,30 @@ class InstanceMemory:
                 scored.append((-score, inst.id))
         return [i for _, i in sorted(scored)]
 
+    def _moved_here(self, detection: Detection) -> Instance | None:
+        """The instance of the detection's label that a caller moved to where the detection stands
+        (`move`) and that has not been seen since, for a detection that matches nothing.
+
+        A move carries the thing's voxels by the motion the caller planned, which is only as good
+        as what the caller knew of the thing: a box whose bottom was hidden in a drawer, or taken
+        as 25 cm tall where it is 9 cm, put down by where its top was to go, left its voxels in
+        the air above it or half inside it. The next view looks through them, they all go, and the
+        box was a new thing there, while the box picked away was gone: its pick back found no route
+        that kept off the box itself (recursive 1178 and 1261 of tuning-wide). Where the
+        detection's footprint shares `MOVED_SHARE` of the smaller of the two with the footprint the
+        thing was moved to, it is that thing, live or gone in this frame (the one sharing most),
+        and what the view shows of it replaces the voxels the move guessed.
+        """
+        lo, hi = box_of(detection.keys, self.config.voxel_m)
+        best, best_share = None, MOVED_SHARE
+        for inst in self.instances.values():
+            if inst.label != detection.label or inst.moved_to is None or (inst.gone and inst.gone_frame != self.frame):
+                continue
+            share = _footprint_share((lo[:2], hi[:2]), (inst.moved_to[0], inst.moved_to[1]))
+            if share >= best_share:
+                best, best_share = inst, share
+        return best
+
     def _create(self, detection: Detection) -> Instance:
         inst = Instance(self._next_id, detection.label, detection.colour, detection.keys, detection.hits,
                         self.config.voxel_m, self.frame, self.frame, detection.hint, {self.frame})
@@ -284,6 +331,7 @@ class InstanceMemory:
     def _absorb_detection(self, inst: Instance, detection: Detection) -> None:
         inst.keys, inst.hits = union(inst.keys, inst.hits, detection.keys, detection.hits)
         inst.last_seen = self.frame
+        inst.moved_to = None  # seen where it is
         if detection.hint >= 0:
             inst.hint = detection.hint
         inst.frames.add(self.frame)
@@ -307,6 +355,13 @@ class InstanceMemory:
             set_parent(self.instances, target, other.parent)
         del self.instances[other.id]
         self.aliases[other.id] = target.id
+
+
+def _footprint_share(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> float:
+    """The share of the smaller of two (x, y) boxes, each (lo, hi), that lies in the other."""
+    inter = float(np.prod(np.clip(np.minimum(a[1], b[1]) - np.maximum(a[0], b[0]), 0.0, None)))
+    smaller = min(float(np.prod(a[1] - a[0])), float(np.prod(b[1] - b[0])))
+    return inter / smaller if smaller > 0 else 0.0
 
 
 def _shares(detection: Detection, instances: list[Instance]) -> list[tuple[Instance, Detection]]:

@@ -62,7 +62,7 @@ def overlap(detection: Detection, inst: Instance, config: MemoryConfig,
     near = near_count(small, large)
     containment = near / len(small)
     iou = near / (len(detection.keys) + len(inst.keys) - near)
-    seen = _bounds(detection.keys, config.voxel_m)
+    seen = box_of(detection.keys, config.voxel_m)
     box = _box_iou(seen, inst.bounds)
     passing = [value for value, threshold in ((iou, config.merge_iou), (containment, config.merge_containment),
                                               (box, config.merge_box_iou)) if value >= threshold]
@@ -73,7 +73,8 @@ def overlap(detection: Detection, inst: Instance, config: MemoryConfig,
     return max(passing, default=0.0)
 
 
-def _bounds(keys: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
+def box_of(keys: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) corners of the box around voxels (their outer faces)."""
     pts = centres(keys, voxel_m)
     return pts.min(axis=0) - voxel_m / 2, pts.max(axis=0) + voxel_m / 2
 
