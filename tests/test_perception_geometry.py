@@ -293,3 +293,16 @@ def test_a_thing_whose_lower_part_is_hidden_reaches_down_to_what_it_stands_on() 
     assert standing_extent(upper, np.vstack([walls, shelf]))[2] == pytest.approx(np.ptp(upper[:, 2]))
     assert standing_extent(upper, floor - [0.0, 0.0, 0.3])[2] == pytest.approx(np.ptp(upper[:, 2]))
     assert standing_extent(upper, None) == pytest.approx(seen_extent(upper))
+
+
+def test_a_thing_on_a_table_reaches_no_lower_than_the_tables_top() -> None:
+    """A box standing over a table's corner hides the top under it, and the table's leg is seen
+    below: the box reaches down to the top (0.755 m), not to the leg (recursive 1250 of
+    tuning-wide: taken 23 cm tall of its 10); without the top's height, to the leg's top."""
+    rng = np.random.default_rng(7)
+    box = rng.uniform((0.45, -0.35, 0.78), (0.6, -0.25, 0.855), (300, 3))
+    leg = np.array([(x, y, z) for x in (0.5, 0.51) for y in (-0.31, -0.3) for z in np.arange(0.63, 0.715, 0.01)])
+    assert standing_extent(box, leg)[2] == pytest.approx(box[:, 2].max() - leg[:, 2].max())
+    assert standing_extent(box, leg, floor_z=0.755)[2] == pytest.approx(box[:, 2].max() - 0.755)
+    floor = np.column_stack([rng.uniform(0.46, 0.59, (50, 2)) * [1, 0] + [0, -0.3], np.full(50, 0.76)])
+    assert standing_extent(box, np.vstack([leg, floor]), floor_z=0.755)[2] == pytest.approx(box[:, 2].max() - 0.76)
