@@ -420,6 +420,37 @@ class DoorsAndDrawers:
             return geometry.handle_point + (amount - depth / 2) * geometry.normal - np.array([0.0, 0.0, 0.03])
         return closed_centre - (depth / 2) * geometry.normal
 
+    def look_again_into(self, box: tuple[np.ndarray, np.ndarray]) -> bool:
+        """Look into the door or drawer standing open whose piece ``box`` stood inside (the box of a
+        thing just lifted out of it) with the wrist camera once more, as when it was opened.
+
+        What a box in a drawer covered lies below the drawer's sides for the head camera: the
+        smaller box of a nest there was never seen, and the graph lacked it, its pick and what it
+        covered (recursive 1261 of tuning-wide). A drawer's piece reaches out as far as the drawer
+        stands open.
+
+        Args:
+            box: (lo, hi) corners of where the thing stood.
+
+        Returns:
+            Whether such a part stood open (and the wrist camera was sent to look).
+        """
+        memory = self.body.memory
+        middle = (np.asarray(box[0], dtype=float) + np.asarray(box[1], dtype=float)) / 2
+        for part_id, opened in self.opened.items():
+            part = memory.get(part_id)
+            piece = memory.instances.get(part.parent) if part.parent is not None else None
+            if opened.amount <= 0 or opened.geometry.kind not in self.look_inside or piece is None or piece.gone:
+                continue
+            lo, hi = piece.bounds
+            if opened.geometry.kind == "drawer":
+                out = opened.amount * np.asarray(opened.geometry.normal, dtype=float)
+                lo, hi = np.minimum(lo, lo + out), np.maximum(hi, hi + out)
+            if np.all(middle >= lo - PIECE_MARGIN_M) and np.all(middle <= hi + PIECE_MARGIN_M):
+                self._look_into(opened.look_point)
+                return True
+        return False
+
     def _look_into(self, point: np.ndarray) -> None:
         """The wrist camera at ``point``, its frame into the memory, the arm folded away again, keeping
         off all that is remembered (the part just opened among it). A view that cannot be reached

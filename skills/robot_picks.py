@@ -86,12 +86,14 @@ class Picks:
         self.idle_toward_robot_m = idle_toward_robot_m
         self.parts = parts
         self.away: dict[int, Away] = {}
-        self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood
+        self.vacated: dict[int, Box] = {}  # the box each thing away filled where it stood, down to its foot
 
     def pick_away(self, obj: Instance) -> SkillResult:
         """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
         there is one, beyond the strip before the robot that the arm works over; where none is
-        free, on top of a thing it put out of the way before (`_on_a_thing_away`).
+        free, on top of a thing it put out of the way before (`_on_a_thing_away`). Lifted out of
+        a door or drawer standing open, the wrist camera looks in again at what it covered
+        (`DoorsAndDrawers.look_again_into`).
 
         Args:
             obj: the thing to move out of the way.
@@ -112,7 +114,8 @@ class Picks:
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
         keep_off = self._near(obj)
-        extent = standing_extent(points, np.vstack([keep_off, surface.points()]))
+        extent = standing_extent(points, np.vstack([keep_off, surface.points()]), floor_z=surface_top(surface))
+        box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
         toward = np.asarray(body.home[:2]) - top[:2]
         near = top[:2] + self.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
@@ -159,6 +162,7 @@ class Picks:
         body.memory.move(obj.id, _translation(place - top), carried=True)
         self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
         self.vacated[obj.id] = box
+        self.parts.look_again_into(box)
         return SkillResult(True)
 
     def _on_a_thing_away(self, obj: Instance, extent: np.ndarray, reachable: Callable[[np.ndarray], np.ndarray]
@@ -274,7 +278,9 @@ class Picks:
         it before (the clock a box was lifted off, the smaller box in the larger) and the thing is
         put back over it, so it is not kept off: kept off, the box coming down over the clock
         ruled out every route checked clear, and the one taken unchecked swept the box across a
-        chest's handles and pulled both its drawers open (recursive 1016 of tuning-wide)."""
+        chest's handles and pulled both its drawers open (recursive 1016 of tuning-wide). The box
+        reaches down to what the thing stood on: a box in a drawer is remembered by its top only,
+        and what it covered, seen once it was lifted, stood under that top (recursive 1261)."""
         seen = self.body.points_near({obj.id}, () if covering is None else (covering,), COVERED_M)
         return np.vstack([seen, *self._closed_drawers()])
 
