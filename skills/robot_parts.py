@@ -421,13 +421,12 @@ class DoorsAndDrawers:
         return closed_centre - (depth / 2) * geometry.normal
 
     def look_again_into(self, box: tuple[np.ndarray, np.ndarray]) -> bool:
-        """Look into the door or drawer standing open whose piece ``box`` stood inside (the box of a
-        thing just lifted out of it) with the wrist camera once more, as when it was opened.
+        """Look once more with the wrist camera, as when it was opened, into the door or drawer
+        standing open whose piece ``box`` stood inside (the box of a thing just lifted out of it).
 
-        What a box in a drawer covered lies below the drawer's sides for the head camera: the
-        smaller box of a nest there was never seen, and the graph lacked it, its pick and what it
-        covered (recursive 1261 of tuning-wide). A drawer's piece reaches out as far as the drawer
-        stands open.
+        What a box in a drawer covered lies below the drawer's sides for the head camera: the thing
+        under a nest's box there was never seen, and the graph lacked it (recursive 1261 of
+        tuning-wide). A drawer's piece reaches out as far as the drawer stands open.
 
         Args:
             box: (lo, hi) corners of where the thing stood.

@@ -24,7 +24,8 @@ def robot(monkeypatch: pytest.MonkeyPatch) -> tuple[Robot, list[np.ndarray]]:
     _remember(robot, "table", (0.0, 0.3, 0.745), (1.2, 0.8, 0.02))
     chest = _remember(robot, "drawer chest", (0.0, 0.4, 0.9), (0.4, 0.3, 0.3))
     drawer = _remember(robot, "drawer", (0.0, 0.1, 0.82), (0.36, 0.3, 0.1), chest)
-    geometry = PartGeometry("drawer", np.array([0.0, 0.23, 0.82]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]))
+    geometry = PartGeometry("drawer", np.array([0.0, 0.23, 0.82]), np.array([1.0, 0.0, 0.0]),
+                            np.array([0.0, -1.0, 0.0]))
     robot.parts.opened[drawer.id] = Opened(geometry, 0.15, Pose2D(0.0, -0.6, np.pi / 2), LOOK)
     looked: list[np.ndarray] = []
     monkeypatch.setattr(robot.parts, "_look_into", looked.append)

@@ -8,9 +8,10 @@ longer there are forgotten (`agent.perception.staleness`); an instance left with
 marked gone. A thing that moved reappears as a new instance wherever it no longer overlaps its old
 voxels (a cup picked away); the memory does not guess that it is the same thing, and a caller that
 knows (the skill that moved it) says so with `InstanceMemory.merge` or, beforehand,
-`InstanceMemory.move`, which for a thing carried also says where it now stands. A door swung open usually keeps its identity by itself: the strip along its
-hinge is hidden behind the open door, not stale, and the open door overlaps it. Parts (handles,
-doors, drawers) are attached to a parent (`agent.perception.part_parents`).
+`InstanceMemory.move`, which for a thing carried also says where it now stands. A door swung open
+usually keeps its identity by itself: the strip along its hinge is hidden behind the open door, not
+stale, and the open door overlaps it. Parts (handles, doors, drawers) are attached to a parent
+(`agent.perception.part_parents`).
 """
 
 from __future__ import annotations
