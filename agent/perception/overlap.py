@@ -74,7 +74,15 @@ def overlap(detection: Detection, inst: Instance, config: MemoryConfig,
 
 
 def box_of(keys: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) corners of the box around voxels (their outer faces)."""
+    """The box around voxels, to their outer faces.
+
+    Args:
+        keys: packed voxel keys (`agent.perception.voxels`), at least one.
+        voxel_m: the voxels' size (m).
+
+    Returns:
+        (lo, hi) corners.
+    """
     pts = centres(keys, voxel_m)
     return pts.min(axis=0) - voxel_m / 2, pts.max(axis=0) + voxel_m / 2
 
