@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 from agent.mapping.camera import Intrinsics
 from agent.perception.frames import Detection, check_frame, check_labels, detect, frame_labels
 from agent.perception.instances import FrameUpdate, Instance, MemoryConfig, family_bounds
-from agent.perception.overlap import box_of, overlap
+from agent.perception.overlap import box_of, overlap, share_within
 from agent.perception.part_parents import attach_parts, set_parent
 from agent.perception.staleness import DepthView, depth_view, stale_voxels
 from agent.perception.voxels import centres, pack, union, voxel_indices
@@ -317,7 +317,8 @@ class InstanceMemory:
         for inst in self.instances.values():
             if inst.label != detection.label or inst.moved_to is None or (inst.gone and inst.gone_frame != self.frame):
                 continue
-            share = _footprint_share((lo[:2], hi[:2]), (inst.moved_to[0], inst.moved_to[1]))
+            seen, put = (lo[:2], hi[:2]), (inst.moved_to[0], inst.moved_to[1])
+            share = max(share_within(seen, put), share_within(put, seen))  # of the smaller of the two
             if share >= best_share:
                 best, best_share = inst, share
         return best
@@ -356,13 +357,6 @@ class InstanceMemory:
             set_parent(self.instances, target, other.parent)
         del self.instances[other.id]
         self.aliases[other.id] = target.id
-
-
-def _footprint_share(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> float:
-    """The share of the smaller of two (x, y) boxes, each (lo, hi), that lies in the other."""
-    inter = float(np.prod(np.clip(np.minimum(a[1], b[1]) - np.maximum(a[0], b[0]), 0.0, None)))
-    smaller = min(float(np.prod(a[1] - a[0])), float(np.prod(b[1] - b[0])))
-    return inter / smaller if smaller > 0 else 0.0
 
 
 def _shares(detection: Detection, instances: list[Instance]) -> list[tuple[Instance, Detection]]:

@@ -68,7 +68,7 @@ def overlap(detection: Detection, inst: Instance, config: MemoryConfig,
                                               (box, config.merge_box_iou)) if value >= threshold]
     lo, hi = inst.bounds if family is None else family
     around = (lo - config.voxel_m, hi + config.voxel_m)  # a face seen edge-on quantises a voxel beyond
-    if _volume(seen) <= NESTED_VOLUME * _volume(around) and _share_within(seen, around) >= NESTED_SHARE:
+    if _volume(seen) <= NESTED_VOLUME * _volume(around) and share_within(seen, around) >= NESTED_SHARE:
         passing.append(NESTED_SHARE)
     return max(passing, default=0.0)
 
@@ -91,8 +91,16 @@ def _volume(box: tuple[np.ndarray, np.ndarray]) -> float:
     return float(np.prod(np.clip(box[1] - box[0], 0.0, None)))
 
 
-def _share_within(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> float:
-    """The share of box ``a``'s volume inside box ``b``."""
+def share_within(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> float:
+    """The share of box ``a``'s volume inside box ``b`` (of its area, for boxes in the plane).
+
+    Args:
+        a: (lo, hi) corners of one box, of any dimension.
+        b: (lo, hi) corners of the other, of the same dimension.
+
+    Returns:
+        The share, 0 where ``a`` is empty.
+    """
     inter = np.prod(np.clip(np.minimum(a[1], b[1]) - np.maximum(a[0], b[0]), 0.0, None))
     return float(inter / _volume(a)) if _volume(a) > 0 else 0.0
 
