@@ -392,6 +392,42 @@ def test_a_move_that_stops_on_new_contacts_leaves_what_it_began_against_but_stop
         assert drawer() >= shut - 0.005
 
 
+def test_a_closed_door_the_arm_carries_a_can_into_holds_at_its_end_stop() -> None:
+    """The hand carries a can level at a closed cabinet door, on past its front, without stopping
+    on contacts: the door stays shut at its end stop and the arm is held back against it, where
+    before the world let the arm and the can push the door 0.09 rad in through its closed end (a
+    carried box pushed a cabinet's door 0.38 rad in, recursive 1259 of tuning-wide)."""
+    scene = tabletop_variant("door-only", 2)
+    colour, placement = scene.storage[0]
+    placement = dataclasses.replace(placement, pose=(placement.pose[0], 0.05, *placement.pose[2:]), contents=())
+    x = placement.pose[0]
+    can = next(obj for obj in scene.objects if obj.category == "can")
+    scene = dataclasses.replace(scene, storage=((colour, placement),), objects=(
+        dataclasses.replace(can, center=(x, -0.3, can.center[2])),))  # the cabinet emptied, 35 cm nearer
+    world = World(CameraConfig())
+    ik = _IK(world.start_tabletop(scene, (x, -(scene.table_size[1] / 2 + ROBOT_RADIUS + 0.03), math.pi / 2)))
+    try:
+        piece = world.stage.built.storage[placement.furniture_id]
+        front = p.getAABB(piece.body, piece.links["door_0"], physicsClientId=world.client)[0][1]
+        top = np.array(world.object_position(can.instance_id)) + [0.0, 0.0, can.dims[1] / 2]
+        _go(world, READY)
+        q = _line(world, ik, ik.solve(READY, top + [0, 0, 0.2], DOWN), [top + [0, 0, 0.2 - 0.04 * k] for k in range(1, 6)], DOWN)
+        assert world.gripper(close=True)["id"] == can.instance_id
+        q = _line(world, ik, q, [top + [0, 0, 0.03 * k] for k in range(1, 4)], DOWN)
+        start = _tcp(world)
+        path = [q]
+        for k in range(1, round((front - start[1]) / 0.01) + 8):  # on to 4 cm past the door's front
+            path.append(ik.solve(path[-1], start + [0.0, 0.01 * k, 0.0], DOWN))
+        samples = np.vstack([np.linspace(a, b, 6)[1:] for a, b in zip(path, path[1:])])
+        result = world.follow_trajectory(samples, 0.02, stop_on_contact=False)
+        assert "door" in {c["category"] for c in result.contacts}
+        assert world.part_states()[placement.furniture_id]["door_0"] == pytest.approx(0.0, abs=1e-3)
+        assert _tcp(world)[1] < front  # held back in front of it
+    finally:
+        ik.close()
+        world.close()
+
+
 def test_an_open_bottomed_box_put_back_over_what_it_covered_stands_on_its_walls() -> None:
     """The shell is held by the closed fingertips on its lid, lifted off the smaller shell it
     covers and let go of where it stood: it stands on the table around that shell, not on its top."""

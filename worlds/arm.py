@@ -8,12 +8,15 @@ friction. The world has no gravity: the motors need not hold the arm up, and not
 A grasp holds one thing in the hand in one of two ways:
 - a link of an articulated body (a drawer's or door's handle) is tied to ``panda_hand`` by a fixed
   constraint at their relative pose when the gripper closed, so the part follows the hand through
-  its own joint, as far as its joint limits and friction let it; the limits are held as end stops
-  after every step (`Arm._hold_end_stops`), where the grip alone would press the part through them;
+  its own joint, as far as its joint limits and friction let it;
 - a static body (a small object; those have no mass and take no forces) is carried kinematically:
   after every simulation step it is put back at its pose relative to the hand.
 Either way the hand's and fingers' collisions with the held thing are switched off while it is
 held, so the grip itself is not a contact, and the fingers hold where they met it.
+
+The joint limits of every storage part (`Arm.hold_end_stops_of`) are held as end stops after every
+step (`Arm._hold_end_stops`): PyBullet's limits give way to whatever presses on them, the grip on a
+handle or a carried thing, which the world moves whatever the force.
 """
 
 from __future__ import annotations
@@ -143,7 +146,7 @@ class Arm:
         self._targets = np.array(spec.stowed, dtype=float)
         self.grip: Grip | None = None
         self._constraint: int | None = None
-        self._stops: list[tuple[int, float, float]] = []  # a held part's limits (`_end_stops`)
+        self._stops: dict[int, list[tuple[int, float, float]]] = {}  # body -> its parts' limits
         self._carry: np.ndarray | None = None  # hand-to-body transform of a carried body
 
     # -- state ---------------------------------------------------------------------------------
@@ -224,28 +227,39 @@ class Arm:
                                     force=FINGER_FORCE, maxVelocity=FINGER_SPEED, physicsClientId=self.client)
 
     def _step(self, on_step: OnStep) -> None:
-        """One physics step; a held part stays within its end stops and a carried body keeps its place
+        """One physics step; every part stays within its end stops and a carried body keeps its place
         in the hand, then ``on_step`` runs."""
         p.stepSimulation(physicsClientId=self.client)
         self._hold_end_stops()
         self.carry()
         on_step()
 
-    def _hold_end_stops(self) -> None:
-        """Put a part the hand holds back within its joint's limits, at rest there.
+    def hold_end_stops_of(self, body: int) -> None:
+        """Hold the joint limits of ``body``'s drawers and doors as end stops from now on.
 
-        PyBullet's joint limits give way to the grip (`GRIP_FORCE`): a drawer pushed shut by the
-        hand holding its handle went 17 mm past its closed end, and let go of there it sprang back
-        out to 10 mm open, counted open (occlusion 1031 and 1065 of tuning-wide). A real end stop
-        holds, and the arm pressing the part against it is held back.
+        Args:
+            body: an articulated body of the scene (a storage piece).
         """
-        if self.grip is None or not self._stops:
-            return
-        for link, lower, upper in self._stops:
-            value = p.getJointState(self.grip.body, link, physicsClientId=self.client)[0]
-            if not lower <= value <= upper:
-                p.resetJointState(self.grip.body, link, min(max(value, lower), upper), 0.0,
-                                  physicsClientId=self.client)
+        links = range(p.getNumJoints(body, physicsClientId=self.client))
+        if stops := _end_stops(body, links, self.client):
+            self._stops[body] = stops
+
+    def _hold_end_stops(self) -> None:
+        """Put every part pressed past its joint's limits back within them, at rest there.
+
+        PyBullet's joint limits give way to what presses on them: a drawer pushed shut by the hand
+        holding its handle (`GRIP_FORCE`) went 17 mm past its closed end, and let go of there it
+        sprang back out to 10 mm open, counted open (occlusion 1031 and 1065 of tuning-wide); a box
+        carried into a closed cabinet door pushed it 0.38 rad in through its closed end (recursive
+        1259). A real end stop holds, and what presses the part against it is held back.
+        """
+        for body, stops in self._stops.items():
+            links = [link for link, _, _ in stops]
+            states = p.getJointStates(body, links, physicsClientId=self.client)
+            for (link, lower, upper), state in zip(stops, states):
+                if not lower <= state[0] <= upper:
+                    p.resetJointState(body, link, min(max(state[0], lower), upper), 0.0,
+                                      physicsClientId=self.client)
 
     def follow(self, samples: np.ndarray, dt: float, on_step: OnStep, stop_on_contact: bool,
                ignore: Callable[[int, int], bool], stop_on_new_contact: bool = False) -> TrajectoryRun:
@@ -404,7 +418,6 @@ class Arm:
                 orientation, [0, 0, 0, 1], physicsClientId=self.client,
             )
             p.changeConstraint(self._constraint, maxForce=GRIP_FORCE, physicsClientId=self.client)
-            self._stops = _end_stops(body, links, self.client)
         else:
             position, orientation = p.getBasePositionAndOrientation(body, physicsClientId=self.client)
             self._carry = np.linalg.inv(self.link_pose(self.spec.hand_link)) @ _matrix(position, orientation)
@@ -423,7 +436,7 @@ class Arm:
         if self._constraint is not None:
             p.removeConstraint(self._constraint, physicsClientId=self.client)
         self._set_collisions(grip, True)
-        self.grip, self._constraint, self._carry, self._stops = None, None, None, []
+        self.grip, self._constraint, self._carry = None, None, None
         return grip
 
     def _set_collisions(self, grip: Grip, enabled: bool) -> None:

@@ -95,7 +95,8 @@ def set_stage(client: int, scene: HomeSpec | TabletopScene, camera: CameraConfig
         camera: the head camera the robot carries.
 
     Returns:
-        The new stage, and the robot at the origin with its arm stowed.
+        The new stage, and the robot at the origin with its arm stowed, holding every storage
+        part's joint limits as end stops.
     """
     p.resetSimulation(physicsClientId=client)
     home = scene if isinstance(scene, HomeSpec) else None
@@ -104,6 +105,8 @@ def set_stage(client: int, scene: HomeSpec | TabletopScene, camera: CameraConfig
     else:
         built = _tabletop_built(client, scene, build_tabletop(client, scene))
     body = RobotBody(client, camera)
+    for piece in built.storage.values():
+        body.arm.hold_end_stops_of(piece.body)
     riders = Riders(client, built, {thing.instance_id: thing.parent for thing in scene.objects})
     if home is None:
         return Stage(client, built, riders), body
