@@ -103,7 +103,9 @@ class Picks:
 
         Raises:
             SkillPlanError: the robot has not looked yet (no `RobotBody.home`), there is no surface
-                under it or no free spot, or the base did not get to its stand.
+                under it or no free spot, or the base did not get to its stand; the last two say
+                how far out the thing stands where no stand brings it within the arm's reach (the
+                nests in storage at a table's back edge: no spot within reach of both is free).
         """
         body = self.body
         if body.home is None:
@@ -135,23 +137,15 @@ class Picks:
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
         if under_a_board(top, extent, keep_off):  # out of storage: not down in its way out
             obstacles.append(way_out(top, radius, body.home[:2], surface_top(surface) + LANE_ABOVE_M))
-        options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
-        try:  # beyond the strip the arm works over from the robot's stands; else in it
-            spots = idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
-                              allowed_means="within the arm's reach beyond the strip before the robot", **options)
-        except SkillPlanError:
-            try:
-                spots = idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
-                                  allowed_means="within the arm's reach", **options)
-            except SkillPlanError as no_room:  # else on top of a thing put away before it
-                spots = self._on_a_thing_away(obj, extent, reachable)
-                if spots is None:
-                    raise no_room from None
-        (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
-        stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
-        lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
-        spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
-        self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
+        try:
+            spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
+            (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
+            stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
+            lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
+            spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
+            self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
+        except SkillPlanError as error:  # say so where no stand brings the thing within reach
+            raise SkillPlanError(f"{error}{beyond_reach(top, (float(top[0]), edge_y))}") from None
         places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
                           surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=keep_off)
@@ -164,6 +158,35 @@ class Picks:
         self.vacated[obj.id] = box
         self.parts.look_again_into(box)
         return SkillResult(True)
+
+    def _put_down_spots(self, obj: Instance, surface: Instance, obstacles: list[np.ndarray], radius: float,
+                        near: np.ndarray, extent: np.ndarray, beyond_strip: Callable[[np.ndarray], np.ndarray],
+                        reachable: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """Where ``obj`` (of ``extent``, ``radius`` across its footprint) may be put down, nearest
+        ``near`` first: free places of ``surface`` clear of ``obstacles`` beyond the strip the arm
+        works over from the robot's stands (``beyond_strip``), else in it (``reachable``), else on
+        top of a thing put away before it (`_on_a_thing_away`).
+
+        Returns:
+            (k, 3): the spots (x, y, top z).
+
+        Raises:
+            SkillPlanError: no place is free (the reason the surface gives).
+        """
+        options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
+        try:
+            return idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
+                             allowed_means="within the arm's reach beyond the strip before the robot", **options)
+        except SkillPlanError:
+            pass
+        try:
+            return idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
+                             allowed_means="within the arm's reach", **options)
+        except SkillPlanError as no_room:
+            spots = self._on_a_thing_away(obj, extent, reachable)
+            if spots is None:
+                raise no_room from None
+            return spots
 
     def _on_a_thing_away(self, obj: Instance, extent: np.ndarray, reachable: Callable[[np.ndarray], np.ndarray]
                          ) -> np.ndarray | None:
