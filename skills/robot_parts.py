@@ -49,6 +49,10 @@ SEEN_PART_M = 0.25
 SEEN_FIT_M = 0.03
 #: A part a failed open left standing open by more than this (m, rad) is pushed shut again.
 AJAR = {"drawer": 0.005, "door": math.radians(2.0)}
+#: How far short (m) of the stand a part was opened from the base coming back to close it may stop
+#: on a touch: one drive step (`worlds.drive.MAX_STEP`, 5 cm) and a centimetre. A door swung open
+#: against the base rests where the base stood.
+COME_BACK_SHORT_M = 0.06
 #: How far (m) beyond the box of the piece a part belongs to, and of the part, their points and what
 #: stands in them may show in the memory: two voxels.
 PIECE_MARGIN_M = 0.02
@@ -144,13 +148,14 @@ class DoorsAndDrawers:
             pose: where the base is to stand.
             routes: paths over the robot's map, or None to drive straight.
             coming_back: the base comes back to the stand of a part it opened, to close it (the
-                arm may be folded on the way: `RobotBody.drive`'s ``fold_first``).
+                arm may be folded on the way: `RobotBody.drive`'s ``fold_first``; it may stop
+                `COME_BACK_SHORT_M` short of the stand on a touch).
 
         Raises:
             SkillPlanError: the base did not get there.
         """
         self.body.drive(pose, routes, may_fold=self.may_fold(), standing_open=self.standing_open(),
-                        fold_first=coming_back)
+                        fold_first=coming_back, short_of_m=COME_BACK_SHORT_M if coming_back else 0.0)
 
     def open_part(self, part: Instance, handle: int | None = None) -> SkillResult:
         """Stand before the door or drawer ``part``, open it by ``handle``, look inside; the frames
