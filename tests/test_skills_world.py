@@ -25,6 +25,7 @@ from agent.observation import Observation
 from agent.perception.grasp_poses import top_grasp_point
 from agent.perception.instances import Instance
 from agent.perception.memory import InstanceMemory
+from agent.pose import Pose2D
 from agent.perception.part_geometry import PartGeometry, handle_geometry
 from worlds.bus.link import WorldLink
 from skills.base import SkillResult
@@ -34,6 +35,7 @@ from skills.context import SkillContext
 from skills.ports import PortError
 from skills.running import run_to_end
 from skills.arm.idle_space import idle_spot
+from skills.arm.skill_plan import SkillPlanError
 from skills.arm.stand import stand_pose
 from skills.primitives import CloseDoor, CloseDrawer, LookAt, OpenDoor, OpenDrawer, PickAway, PickBack
 from worlds.storage_placement import StoragePlacement
@@ -370,3 +372,19 @@ def test_a_door_blocked_by_an_obstacle_in_its_swing_does_not_open_and_is_let_go(
     assert link.call("arm_state").meta["held"] is None  # not left tied to the cabinet
     angle = _door_angle(_pixels(_observe(link), door_id))
     assert angle == pytest.approx(blocked.achieved, abs=math.radians(8))  # it stopped where the bottle stands
+
+
+def test_a_drive_stopped_by_a_touch_just_short_of_its_pose_may_count_as_there(link: WorldLink) -> None:
+    # A door swung open against the base rests where the base stood: the robot coming back to that
+    # stand to shut it touches the door at its last drive step (occlusion 1249 of tuning-wide).
+    # Here the table's edge, 3 cm before the base, stands in for the door.
+    link.call("reset", {"seed": 6, "tabletop": "drawer-only"})
+    body = RobotBody(link, InstanceMemory(), SkillRegistry(), skill_timeout_s=10.0)
+    x, y, yaw = body.frame("head").base_pose
+    into_the_table = Pose2D(x, y + 0.05, yaw)  # one 5 cm drive step, 2 cm into the table
+    with pytest.raises(SkillPlanError, match=r"the base could not reach .*: it touched table"):
+        body.drive(into_the_table)
+    body.drive(into_the_table, short_of_m=0.06)  # stopped before the table again, a step short: there
+    assert body.pose is not None and into_the_table.y - 0.06 <= body.pose.y < into_the_table.y - 0.01
+    with pytest.raises(SkillPlanError, match=r"it touched table"):
+        body.drive(Pose2D(x, y + 0.2, yaw), short_of_m=0.06)  # stopped 20 cm short: not there
