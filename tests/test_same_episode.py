@@ -36,12 +36,12 @@ EPISODES = {
     "semantic-conformal": (3, ["episode.budget=12"], False, "0f3a327d3505e2a3"),
     "fbe-entropy": (5, ["explore.method=fbe", "episode.budget=10", "stop.rule=entropy"], False, "ab9aa08d397ff9b7"),
     "lfe": (7, ["explore.method=lfe", "episode.budget=8", "stop.rule=budget"], False, "1f075f5d09d4aa87"),
-    "hidden": (60, [], True, "ea906936db7a4c23"),
+    "hidden": (60, [], True, "b8cfa49a245f6a6c"),
 }
 #: A shipped calibration episode (the shortest of the first sixty) and the suite part it came from.
 CALIBRATION, CALIBRATION_EPISODE, CALIBRATION_PART = "calibration-semantic-sim.json", "calib-0011", ("calib", 11)
 #: tabletop task and variant -> digest of the robot's exploration (Table I's executor)
-TABLETOP = {("recursive", 0): "abdcd114744ac648", ("drawer-door", 1): "789384d7713301f8"}
+TABLETOP = {("recursive", 0): "6989fb555b6c3064", ("drawer-door", 1): "789384d7713301f8"}
 
 _DECIDED = ("status", "reason", "failed_behaviour", "answer", "answer_detail", "steps", "step_scores",
             "prediction_set", "acts", "evaluation")

@@ -16,7 +16,7 @@ held, so the grip itself is not a contact, and the fingers hold where they met i
 
 The joint limits of every storage part (`Arm.hold_end_stops_of`) are held as end stops after every
 step (`Arm._hold_end_stops`): PyBullet's limits give way to whatever presses on them, the grip on a
-handle or a carried thing, which the world moves whatever the force.
+handle, the arm's links, or a carried thing, which the world moves whatever the force.
 """
 
 from __future__ import annotations
