@@ -115,8 +115,8 @@ class Picks:
         surface = body.stood_on(obj)
         if surface is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
-        keep_off = self._near(obj)
-        extent = standing_extent(points, np.vstack([keep_off, surface.points()]), floor_z=surface_top(surface))
+        keep_off, table_top = self._near(obj), surface_top(surface)
+        extent = standing_extent(points, np.vstack([keep_off, surface.points()]), floor_z=table_top)
         box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
         toward = np.asarray(body.home[:2]) - top[:2]
@@ -136,7 +136,7 @@ class Picks:
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
         if under_a_board(top, extent, keep_off):  # out of storage: not down in its way out
-            obstacles.append(way_out(top, radius, body.home[:2], surface_top(surface) + LANE_ABOVE_M))
+            obstacles.append(way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M))
         try:
             spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
             (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
@@ -148,7 +148,7 @@ class Picks:
             raise SkillPlanError(f"{error}{beyond_reach(top, (float(top[0]), edge_y))}") from None
         places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
         result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                          surface_z=surface_top(surface), label=f"{obj.label} {obj.id}", keep_off=keep_off)
+                          surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
         if not result.ok:
             out_of_reach = beyond_reach(top, (stand_x, edge_y)) if result.unplanned else ""
             return SkillResult(False, result.reason + out_of_reach)

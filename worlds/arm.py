@@ -146,7 +146,7 @@ class Arm:
         self._targets = np.array(spec.stowed, dtype=float)
         self.grip: Grip | None = None
         self._constraint: int | None = None
-        self._stops: dict[int, list[tuple[int, float, float]]] = {}  # body -> its parts' limits
+        self._stops: dict[int, tuple[list[int], list[float], list[float]]] = {}  # body -> links, lowers, uppers
         self._carry: np.ndarray | None = None  # hand-to-body transform of a carried body
 
     # -- state ---------------------------------------------------------------------------------
@@ -242,7 +242,8 @@ class Arm:
         """
         links = range(p.getNumJoints(body, physicsClientId=self.client))
         if stops := _end_stops(body, links, self.client):
-            self._stops[body] = stops
+            limited, lowers, uppers = (list(column) for column in zip(*stops))
+            self._stops[body] = (limited, lowers, uppers)
 
     def _hold_end_stops(self) -> None:
         """Put every part pressed past its joint's limits back within them, at rest there.
@@ -253,10 +254,9 @@ class Arm:
         carried into a closed cabinet door pushed it 0.38 rad in through its closed end (recursive
         1259). A real end stop holds, and what presses the part against it is held back.
         """
-        for body, stops in self._stops.items():
-            links = [link for link, _, _ in stops]
+        for body, (links, lowers, uppers) in self._stops.items():
             states = p.getJointStates(body, links, physicsClientId=self.client)
-            for (link, lower, upper), state in zip(stops, states):
+            for link, lower, upper, state in zip(links, lowers, uppers, states):
                 if not lower <= state[0] <= upper:
                     p.resetJointState(body, link, min(max(state[0], lower), upper), 0.0,
                                       physicsClientId=self.client)
