@@ -131,6 +131,29 @@ def test_a_box_in_a_drawer_is_lifted_and_put_back_before_the_drawer_closes() -> 
     assert retrieval_plan(result.graph, "soap") == ["open drawer (o3)", "pick away box (o5)", "pick soap (o6)"]
 
 
+
+def test_an_action_reveals_only_what_lies_inside_what_it_opened_or_lifted() -> None:
+    """A soap on the chest's top and a can on the table come into view only once a drawer stands
+    open (from where the robot stood to open it, in the world); neither lay inside what was opened."""
+    scene = SymbolicScene([
+        Thing("1", "table"),
+        Thing("2", "drawer chest", "1", "on"),
+        Thing("3", "drawer", "2", "belongs", part="drawer"),
+        Thing("4", "cup", "3", "inside", hidden_by=("3",), pickable=True),
+        Thing("5", "soap", "2", "on", hidden_by=("3",)),
+        Thing("6", "can", "1", "on", hidden_by=("3",)),
+        Thing("7", "box", "1", "on", pickable=True),
+        Thing("8", "apple", "7", "inside", hidden_by=("7",), pickable=True),
+        Thing("9", "mug", "1", "on", hidden_by=("7",)),
+    ])
+    result = Recorder(scene).run()
+    g = result.graph
+    assert {e.target for e in g.edges("action-object")} == {"o4", "o8"}
+    assert g.edge("open:3", "o4").relation == "reveals" and g.edge("pick:7", "o8").relation == "reveals"
+    assert g.parent("o5") == ("o2", "on") and g.parent("o9") == ("o1", "on")
+    assert {o.id for o in g.objects()} >= {"o5", "o6", "o9"}
+    assert [e.revealed for e in result.log if e.revealed] == [("o4",), ("o8",)]
+
 def test_without_the_verifier_the_blocked_door_fails_and_nothing_needs_undoing() -> None:
     class Blind(RuleDecisionModule):
         def verify(self, action, context):

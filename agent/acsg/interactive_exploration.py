@@ -183,10 +183,16 @@ class Explorer:
 
     # ---- memory: nodes and spatial relations (Algorithm 2) ------------------------------------
     def _perceive(self, revealed_by: ActionNode | None) -> list[str]:
-        """Observe; add what is new (with its relations, and reveal edges from ``revealed_by``)."""
+        """Observe; add what is new, with its relations, and reveal edges from ``revealed_by`` to
+        what of it lies inside what that action opened or lifted (`_opened_or_lifted`).
+
+        Returns:
+            The ids of the objects ``revealed_by`` revealed.
+        """
         detections = self.perception.observe()
         self.visible = {d.id: d for d in detections}
-        new = []
+        new: list[str] = []
+        revealed: list[str] = []
         for det in detections:
             if det.id in self.graph:
                 continue
@@ -200,10 +206,27 @@ class Explorer:
                 self._pending.append(det)
         self._add_relations()
         if revealed_by is not None:
-            for node in new:
+            inside = self._opened_or_lifted(revealed_by)
+            revealed = [d.id for d in detections
+                        if d.id in new and d.relation == "inside" and d.parent and object_id(d.parent) in inside]
+            for node in revealed:
                 self.graph.add_edge(revealed_by.id, node, "action-object", "reveals")
         self._fold_absorbed(detections)
-        return new
+        return revealed
+
+    def _opened_or_lifted(self, action: ActionNode) -> set[str]:
+        """What ``action`` opened or lifted, as what a thing it revealed lies inside: the box it
+        picked away, or the door or drawer it opened and the piece that part belongs to (a drawer
+        holds its things, a cabinet those behind its door).
+
+        A thing first seen after an action is not always what the action revealed: the base
+        drove to a new stand for it, and a soap on the drawer chest's top, hidden behind a box
+        from where the robot first looked, came into view as a drawer opened (recursive 1214 of
+        tuning-wide); a can on the table beside a cabinet likewise as its door opened (occlusion
+        1256). Only what lies inside what was opened or lifted was hidden by it.
+        """
+        parent = self.graph.parent(action.target)
+        return {action.target} | ({parent[0]} if parent is not None and parent[1] == "belongs" else set())
 
     def _fold_absorbed(self, detections: list[Detection]) -> None:
         """Fold the node of each instance the perception has found to be another one (``absorbed``)
