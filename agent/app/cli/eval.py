@@ -149,7 +149,7 @@ def _eval_stop(args: argparse.Namespace) -> int:
 
 def _eval_interactive(args: argparse.Namespace) -> int:
     from agent.app.eval.failure_causes import format_cause_table
-    from agent.app.eval.interactive import (COLUMNS, PAPER_SUCCESS, evaluate_interactive, print_progress,
+    from agent.app.eval.interactive import (COLUMNS, PAPER_SUCCESS, evaluate_interactive, scene_progress,
                                             split_seeds)
     from agent.app.runtime.ray_backend import RayError
     from worlds.tabletop import TASKS
@@ -157,7 +157,7 @@ def _eval_interactive(args: argparse.Namespace) -> int:
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()] if args.tasks else list(TASKS)
     try:
         seed_base, variants = split_seeds(args.split, args.variants, args.seed_base, args.record)
-        report = evaluate_interactive(args.out, tasks, variants, args.executor, print_progress, args.workers,
+        report = evaluate_interactive(args.out, tasks, variants, args.executor, scene_progress(), args.workers,
                                       _recordings(args), seed_base, args.ray)
     except (ValueError, RayError) as error:
         print(f"homebot eval interactive: {error}", file=sys.stderr)
@@ -187,13 +187,13 @@ def _eval_acts(args: argparse.Namespace) -> int:
 
 
 def _eval_coverage(args: argparse.Namespace) -> int:
-    from agent.app.eval.coverage import evaluate_coverage, format_table, plot_curves, print_progress
+    from agent.app.eval.coverage import episode_progress, evaluate_coverage, format_table, plot_curves
     from agent.app.runtime.ray_backend import RayError
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     try:
         report = evaluate_coverage(args.out, args.homes, methods, args.workers, args.model, args.steps,
-                                   print_progress, args.ray)
+                                   episode_progress(), args.ray)
     except (ValueError, RayError) as error:
         print(f"homebot eval coverage: {error}", file=sys.stderr)
         return 2

@@ -14,9 +14,11 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from agent.app.cli.options import add_ray_option, count_option, seed_option
+from agent.app.progress import ProgressLine
 from agent.app.runtime import interrupt
 
 DEFAULT_DATA = Path("runs/lfe-data")
@@ -79,18 +81,17 @@ def _data(args: argparse.Namespace) -> int:
         raise ValueError(f"--workers: {args.workers} must be at least 1")
     started = time.monotonic()
     explored = 0
+    line = ProgressLine()
 
     def progress(done: int, total: int, samples: int | None) -> None:
         nonlocal explored
-        end = "\n" if done == total else ""
         if samples is None:
-            sys.stderr.write(f"\r  {done}/{total} homes (already there)   {end}")
+            line.show(f"{done}/{total} homes (already there)", done == total)
         else:
             explored += 1
             rate = (time.monotonic() - started) / explored
-            sys.stderr.write(f"\r  {done}/{total} homes, last one {samples} maps, ~{rate * (total - done) / 60:.0f} min "
-                             f"left   {end}")
-        sys.stderr.flush()
+            line.show(f"{done}/{total} homes, last one {samples} maps, ~{rate * (total - done) / 60:.0f} min left",
+                      done == total)
         interrupt.check()
 
     seeds = range(args.first_seed, args.first_seed + args.homes)
@@ -108,7 +109,7 @@ def _train(args: argparse.Namespace) -> int:
                  "steps_per_epoch": args.steps_per_epoch, "batch_size": args.batch_size, "crop": args.crop}
     config = replace(TrainConfig(), **{k: v for k, v in overrides.items() if v is not None})
 
-    result = train(args.data, args.out, config, print_training)
+    result = train(args.data, args.out, config, training_progress())
     best = next((line for line in result.history if line["epoch"] == result.best_epoch), None)
     if best is not None:
         mae = ", ".join(f"{value:.2f}" for value in best["val_mae"].values())
@@ -119,22 +120,34 @@ def _train(args: argparse.Namespace) -> int:
     return 0
 
 
-def print_training(event: dict) -> None:
-    """One line per epoch and for the start and the end; the steps on one line that rewrites itself.
+def training_progress() -> Callable[[dict], None]:
+    """The training's progress on stderr: one line per epoch and for the start and the end, the
+    steps of an epoch on a progress line (`agent.app.progress`).
 
-    Args:
-        event: the training's progress event.
+    Returns:
+        A ``progress`` callback for `agent.lfe.train.train`.
     """
-    interrupt.check()
+    line = ProgressLine()
+
+    def progress(event: dict) -> None:
+        interrupt.check()
+        kind = event["event"]
+        if kind == "step":
+            line.show(f"epoch {event['epoch']}: step {event['step']}/{event['steps']}, loss {event['loss']:.3f}")
+        elif kind == "epoch":
+            line.show(f"epoch {event['epoch']}: training L1 {event['train_loss']:.3f}, validation L1 "
+                      f"{event['val_loss']:.3f} (baseline {event['baseline_val_loss']:.3f}), "
+                      f"lr {event['lr']:g}, {event['seconds']:.0f} s", last=True)
+        else:
+            _training_event(event)
+
+    return progress
+
+
+def _training_event(event: dict) -> None:
+    """A line for the training's start, its resumption or its time limit."""
     kind = event["event"]
-    if kind == "step":
-        sys.stderr.write(f"\r  epoch {event['epoch']}: step {event['step']}/{event['steps']}, "
-                         f"loss {event['loss']:.3f}   ")
-    elif kind == "epoch":
-        sys.stderr.write(f"\r  epoch {event['epoch']}: training L1 {event['train_loss']:.3f}, validation L1 "
-                         f"{event['val_loss']:.3f} (baseline {event['baseline_val_loss']:.3f}), "
-                         f"lr {event['lr']:g}, {event['seconds']:.0f} s\n")
-    elif kind in ("start", "resume"):
+    if kind in ("start", "resume"):
         after = f", resuming after epoch {event['epochs_done']}" if kind == "resume" else ""
         sys.stderr.write(f"  training on {event['train_homes']} homes, validating on {event['val_homes']}, "
                          f"{event['epochs']} epochs on {event['device']}{after}\n")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from agent.app.cli.options import Commands, count_option, seed_option
+from agent.app.progress import ProgressLine
 from agent.app.runtime import interrupt
 
 
@@ -49,9 +50,10 @@ def _suite_make(args: argparse.Namespace) -> int:
         print(f"homebot suite make: {error}", file=sys.stderr)
         return 2
 
+    line = ProgressLine()
+
     def progress(part: str, done: int, total: int) -> None:
-        end = "\n" if done == total else ""
-        print(f"\r  {part}: {done}/{total} scenarios", end=end, file=sys.stderr, flush=True)
+        line.show(f"{part}: {done}/{total} scenarios", done == total)
         interrupt.check()
 
     kinds = tuple(k.strip() for k in args.kinds.split(",")) if args.kinds else None

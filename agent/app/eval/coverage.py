@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -24,6 +23,7 @@ import numpy as np
 
 from agent.acsg.metrics import mean_and_sem
 from agent.app.eval.runner import append_results, read_results
+from agent.app.progress import counted
 from agent.lfe.methods import Method
 from agent.app.runtime.pool import as_finished
 
@@ -281,15 +281,11 @@ def plot_curves(rows: list[dict[str, Any]], methods: list[str], path: Path) -> P
     return path
 
 
-def print_progress(done: int, total: int, row: dict[str, Any]) -> None:
-    """Rewrite one line on stderr: the episodes done and the last one's coverage.
+def episode_progress() -> Callable[[int, int, dict[str, Any]], None]:
+    """A progress line on stderr (`agent.app.progress`): the episodes done and the last one's coverage.
 
-    Args:
-        done: episodes done.
-        total: episodes in all.
-        row: the last episode's result.
+    Returns:
+        A ``progress`` callback for `evaluate_coverage`.
     """
-    end = "\n" if done == total else ""
-    sys.stderr.write(f"\r  {done}/{total} episodes, last {row['size']} home {row['seed']} {row['method']}: "
-                     f"{row['coverage']:.1f} % in {row['seconds']:.0f} s   {end}")
-    sys.stderr.flush()
+    return counted("episodes", lambda row: f"{row['size']} home {row['seed']} {row['method']}: "
+                   f"{row['coverage']:.1f} % in {row['seconds']:.0f} s")

@@ -22,7 +22,6 @@ failure by cause (`agent.app.eval.failure_causes`), and keeps both in ``interact
 from __future__ import annotations
 
 import json
-import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import asdict
@@ -37,6 +36,7 @@ from agent.acsg.symbolic import SymbolicScene
 from agent.app.eval.failure_causes import cause_table
 from agent.app.eval.runner import append_results, read_results
 from agent.app.eval.tabletop_recording import record_graph
+from agent.app.progress import counted
 from agent.app.runtime.pool import as_finished
 from worlds.tabletop import TASKS, VARIANTS, tabletop_variant
 from worlds.tabletop_splits import SPLITS
@@ -208,15 +208,11 @@ def table(rows: list[dict[str, Any]], tasks: list[str]) -> dict[str, dict[str, t
             for task in tasks if any(r["task"] == task for r in rows)}
 
 
-def print_progress(done: int, total: int, row: dict[str, Any]) -> None:
-    """Rewrite one line on stderr: the scenes done and how the last one went.
+def scene_progress() -> Callable[[int, int, dict[str, Any]], None]:
+    """A progress line on stderr (`agent.app.progress`): the scenes done and how the last one went.
 
-    Args:
-        done: scenes done.
-        total: scenes in all.
-        row: the last scene's result.
+    Returns:
+        A ``progress`` callback for `evaluate_interactive`.
     """
-    end = "\n" if done == total else ""
-    sys.stderr.write(f"\r  {done}/{total} scenes, last {row['task']} {row['seed']}: "
-                     f"{'success' if row['success'] else 'failed'}, GED {row['graph_edit_distance']:g}   {end}")
-    sys.stderr.flush()
+    return counted("scenes", lambda row: f"{row['task']} {row['seed']}: "
+                   f"{'success' if row['success'] else 'failed'}, GED {row['graph_edit_distance']:g}")

@@ -32,6 +32,7 @@ from worlds.bus.keys import check_namespace
 from worlds.bus.liveness import describe_exit
 from worlds.bus.session import check_endpoint, free_tcp_endpoint
 from agent.app.config import Config, load_config
+from agent.app.progress import ProgressLine
 from agent.app.runtime.episode_bus import EpisodeBus
 from agent.app.runtime import interrupt, ray_backend
 from agent.app.runtime.pool import in_processes, quiet_worker
@@ -180,7 +181,8 @@ def append_results(path: Path, finished: Iterator[tuple[Any, dict[str, Any]]], t
 
 
 def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None]:
-    """A progress line on stderr, rewritten after each episode, with the time left at the pace so far.
+    """A progress line on stderr (`agent.app.progress`) after each episode, with the time left at the
+    pace so far.
 
     Args:
         started: `time.monotonic` when the episodes began.
@@ -188,13 +190,12 @@ def stderr_progress(started: float) -> Callable[[int, int, dict[str, Any]], None
     Returns:
         A ``progress`` callback for `run_jobs`.
     """
+    line = ProgressLine()
 
     def progress(done: int, total: int, result: dict[str, Any]) -> None:
         rate = (time.monotonic() - started) / done
-        end = "\n" if done == total else ""
-        sys.stderr.write(f"\r  {done}/{total} episodes, last {result['variant']} {result['id']} "
-                         f"({result['status']}), about {rate * (total - done) / 60:.1f} min left   {end}")
-        sys.stderr.flush()
+        line.show(f"{done}/{total} episodes, last {result['variant']} {result['id']} ({result['status']}), "
+                  f"about {rate * (total - done) / 60:.1f} min left", done == total)
 
     return progress
 
