@@ -14,9 +14,8 @@ A grasp holds one thing in the hand in one of two ways:
 Either way the hand's and fingers' collisions with the held thing are switched off while it is
 held, so the grip itself is not a contact, and the fingers hold where they met it.
 
-The joint limits of every storage part (`Arm.hold_end_stops_of`) are held as end stops after every
-step (`Arm._hold_end_stops`): PyBullet's limits give way to whatever presses on them, the grip on a
-handle, the arm's links, or a carried thing, which the world moves whatever the force.
+After every physics step the storage parts are put back within their end stops (``end_stops``,
+`worlds.end_stops.EndStops`), which PyBullet's joint limits alone do not hold against the arm.
 """
 
 from __future__ import annotations
@@ -28,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
+from worlds.end_stops import EndStops
 from worlds.robot_arm import ArmSpec
 
 #: The physics step; a trajectory sample lasting dt is executed in ceil(dt / SIM_DT) equal steps.
@@ -57,16 +57,6 @@ def _matrix(position: Iterable[float], orientation: Iterable[float]) -> np.ndarr
     pose[:3, :3] = np.array(p.getMatrixFromQuaternion(list(orientation))).reshape(3, 3)
     pose[:3, 3] = list(position)
     return pose
-
-
-def _end_stops(body: int, links: Iterable[int], client: int) -> list[tuple[int, float, float]]:
-    """(link, lower, upper) of each of ``links`` that moves on a limited joint (a drawer, a door)."""
-    stops = []
-    for link in links:
-        info = p.getJointInfo(body, link, physicsClientId=client)
-        if info[2] in (p.JOINT_PRISMATIC, p.JOINT_REVOLUTE) and info[8] <= info[9]:
-            stops.append((link, float(info[8]), float(info[9])))
-    return stops
 
 
 def _position_quaternion(pose: np.ndarray) -> tuple[list[float], list[float]]:
@@ -146,7 +136,7 @@ class Arm:
         self._targets = np.array(spec.stowed, dtype=float)
         self.grip: Grip | None = None
         self._constraint: int | None = None
-        self._stops: dict[int, tuple[list[int], list[float], list[float]]] = {}  # body -> links, lowers, uppers
+        self.end_stops = EndStops(client)
         self._carry: np.ndarray | None = None  # hand-to-body transform of a carried body
 
     # -- state ---------------------------------------------------------------------------------
@@ -230,36 +220,9 @@ class Arm:
         """One physics step; every part stays within its end stops and a carried body keeps its place
         in the hand, then ``on_step`` runs."""
         p.stepSimulation(physicsClientId=self.client)
-        self._hold_end_stops()
+        self.end_stops.hold()
         self.carry()
         on_step()
-
-    def hold_end_stops_of(self, body: int) -> None:
-        """Hold the joint limits of ``body``'s drawers and doors as end stops from now on.
-
-        Args:
-            body: an articulated body of the scene (a storage piece).
-        """
-        links = range(p.getNumJoints(body, physicsClientId=self.client))
-        if stops := _end_stops(body, links, self.client):
-            limited, lowers, uppers = (list(column) for column in zip(*stops))
-            self._stops[body] = (limited, lowers, uppers)
-
-    def _hold_end_stops(self) -> None:
-        """Put every part pressed past its joint's limits back within them, at rest there.
-
-        PyBullet's joint limits give way to what presses on them: a drawer pushed shut by the hand
-        holding its handle (`GRIP_FORCE`) went 17 mm past its closed end, and let go of there it
-        sprang back out to 10 mm open, counted open (occlusion 1031 and 1065 of tuning-wide); a box
-        carried into a closed cabinet door pushed it 0.38 rad in through its closed end (recursive
-        1259). A real end stop holds, and what presses the part against it is held back.
-        """
-        for body, (links, lowers, uppers) in self._stops.items():
-            states = p.getJointStates(body, links, physicsClientId=self.client)
-            for link, lower, upper, state in zip(links, lowers, uppers, states):
-                if not lower <= state[0] <= upper:
-                    p.resetJointState(body, link, min(max(state[0], lower), upper), 0.0,
-                                      physicsClientId=self.client)
 
     def follow(self, samples: np.ndarray, dt: float, on_step: OnStep, stop_on_contact: bool,
                ignore: Callable[[int, int], bool], stop_on_new_contact: bool = False) -> TrajectoryRun:

@@ -106,7 +106,7 @@ def set_stage(client: int, scene: HomeSpec | TabletopScene, camera: CameraConfig
         built = _tabletop_built(client, scene, build_tabletop(client, scene))
     body = RobotBody(client, camera)
     for piece in built.storage.values():
-        body.arm.hold_end_stops_of(piece.body)
+        body.arm.end_stops.add(piece.body)
     riders = Riders(client, built, {thing.instance_id: thing.parent for thing in scene.objects})
     if home is None:
         return Stage(client, built, riders), body
