@@ -187,7 +187,7 @@ class Robot:
         """
         body = self.body
         assert body.pose is not None
-        surface = self._nearest_surface()
+        surface = body.nearest_surface(body.pose)
         if surface is None:
             return
         base, ahead = np.asarray(body.pose[:2]), _ahead(body.pose)
@@ -287,16 +287,6 @@ class Robot:
         result = self.body.run(STOW)
         if not result.ok:
             raise SkillPlanError(result.reason)
-
-    def _nearest_surface(self) -> Instance | None:
-        """The remembered table or counter nearest the base, or None."""
-        body = self.body
-        assert body.pose is not None
-        base = np.asarray(body.pose[:2])
-        surfaces = body.surfaces()
-        if not surfaces:
-            return None
-        return min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
 
 
 def _ahead(pose: Pose2D) -> np.ndarray:

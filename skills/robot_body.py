@@ -34,6 +34,7 @@ from skills.context import SkillContext
 from skills.registry import SkillRegistry
 from skills.replies import arm_state
 from skills.running import run_to_end
+from skills.table_sides import TableSides
 from worlds.bus.link import WorldLink
 
 SURFACE_LABELS = ("table", "counter")
@@ -148,7 +149,9 @@ class RobotBody:
 
     def drive(self, pose: Pose2D, routes: Routes | None = None, *, may_fold: bool = True,
               standing_open: Sequence[np.ndarray] = (), fold_first: bool = False, short_of_m: float = 0.0) -> None:
-        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else straight.
+        """Drive to ``pose``: along ``routes`` when they lead there from where the base is, else
+        round the table the robot works at where the straight way would cross it (from one of its
+        sides to another: `_way_round_the_table`), else straight.
         The arm is left where the last skill left it (backed off ahead of the base), which the
         world checks on the way; a straight drive whose hand would cross a part this robot left
         standing open (``standing_open``) backs away from it first (`skills.arm.drive_clear`). When
@@ -207,6 +210,8 @@ class RobotBody:
         if routes is not None and here is not None and math.dist(here[:2], routes.start_xy) < 0.05 \
                 and routes.reaches(np.array(pose[:2])):
             path = np.round(routes.to(np.array(pose[:2]))[1:], 3).tolist()
+        elif here is not None and len(way := self._way_round_the_table(here, pose)) > 1:
+            path = way
         elif here is not None and any(len(points) for points in standing_open):
             arm = arm_state(self.link.call("arm_state", {}).meta)
             if not arm["stowed"]:
@@ -217,6 +222,63 @@ class RobotBody:
                         return folded
                     path = path if folded is None else path[2:]
         return self._drive_along(path, pose[2])
+
+    def _way_round_the_table(self, here: Pose2D, pose: Pose2D) -> list[list[float]]:
+        """The way from ``here`` to ``pose`` round the table the robot works at (`TableSides.way`).
+        Where that way is not straight and the arm is out, the base first backs `FOLD_REACH_M`
+        straight away from the table and folds the arm in there: the base keeps its heading along
+        the way and turns at its end, so an arm held out ahead would sweep the table's corner, and
+        an arm folded in where it was, at the table's back, swept a finger into the box it had
+        just put down beside the stand (recursive 1268 of tuning-wide).
+
+        Returns:
+            The waypoints (x, y) from where the base then stands; one, the goal, where the straight
+            way passes or no table is known.
+
+        Raises:
+            SkillPlanError: the arm could not be folded in.
+        """
+        table = self.table_sides()
+        if table is None:
+            return [[pose[0], pose[1]]]
+        way = table.way(np.asarray(here[:2]), np.asarray(pose[:2]))
+        if len(way) > 1 and not arm_state(self.link.call("arm_state", {}).meta)["stowed"]:
+            ahead = np.array([math.cos(here[2]), math.sin(here[2])])
+            self._drive_along([list(np.asarray(here[:2]) - FOLD_REACH_M * ahead)], here[2])
+            arm = arm_state(self.link.call("arm_state", {}).meta)
+            folded = self.run(STOW, surface_z=self.surface_z(arm["tcp_pose"][:3, 3], FOLD_REACH_M))
+            if not folded.ok:
+                raise SkillPlanError(f"the arm could not be folded in to drive round the table: {folded.reason}")
+            assert self.pose is not None  # the drive's reply said where the base stands
+            way = table.way(np.asarray(self.pose[:2]), np.asarray(pose[:2]))
+        return [list(xy) for xy in way]
+
+    def table_sides(self) -> TableSides | None:
+        """The sides of the table the robot started before: the remembered table or counter
+        nearest ``home``, its top's points (within 1.5 cm of its top) as its footprint.
+
+        Returns:
+            The sides, or None before the first look, where no such surface is remembered, or where
+            ``home`` stands on its footprint.
+        """
+        if self.home is None:
+            return None
+        surface = self.nearest_surface(self.home)
+        if surface is None:
+            return None
+        points = surface.points()
+        try:
+            return TableSides.around(points[points[:, 2] >= surface_top(surface) - 0.015, :2], self.home)
+        except ValueError:
+            return None
+
+    def nearest_surface(self, pose: Pose2D) -> Instance | None:
+        """The remembered table or counter nearest the base standing at ``pose``, or None."""
+        surfaces = self.surfaces()
+        if not surfaces:
+            return None
+        base = np.asarray(pose[:2])
+        return min(surfaces, key=lambda inst: float(np.min(np.linalg.norm(inst.points()[:, :2] - base, axis=1))))
 
     def _fold_on_the_way(self, pose: Pose2D, path: list[list[float]], arm: dict[str, Any],
                          standing_open: Sequence[np.ndarray]) -> dict[str, Any] | None:

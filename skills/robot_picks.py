@@ -2,11 +2,13 @@
 
 - pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
   the doors and drawers sweep as they open and of the lanes to their handles:
-  `agent.acsg.keep_clear`), the base slid along the table's edge (the robot faces the table along
-  +y, as the tabletop scenes start it) to where the arm reaches both the object and the spot
-  (`PLACE_REACH_M`), level with the object where it can; where no place on it is free, on top of
-  a thing put out of the way before it (`stack_spot`);
-- pick back: from where it was put down to where it was.
+  `agent.acsg.keep_clear`), the base slid along a side of the table to where the arm reaches both
+  the object and the spot (`PLACE_REACH_M`), level with the object where it can: along the front,
+  where the robot started facing the table, and where that fails, along the other sides that the
+  arm reaches the object from, the nearest first (`skills.table_sides`), at a stand where the arm
+  comes out of the base clear of what stands there; where no place on it is free, on top of a
+  thing put out of the way before it (`stack_spot`);
+- pick back: from the stand it was picked from, from where it was put down to where it was.
 
 The box a thing filled before it was picked away is kept while it is away (``vacated``): what is
 found there lay inside it (the Matryoshka's smaller doll).
@@ -28,12 +30,14 @@ from agent.perception.hidden_bodies import closed_drawer_faces
 from agent.perception.instances import Instance
 from agent.pose import Pose2D
 from skills.arm.grasps import ObjectGrasp
+from skills.arm.fold_plans import unfold_problem
 from skills.arm.headroom import under_a_board
 from skills.arm.idle_space import idle_spot, reach_along, stack_spot
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody, surface_top
 from skills.robot_parts import DoorsAndDrawers
+from skills.table_sides import FRONT, SIDE_NAMES, SIDES, TableSides
 
 #: A thing whose top grasp point a look finds this near (m) where it was picked from is back:
 #: the evaluation's tolerance for a thing put back.
@@ -54,19 +58,22 @@ PLACE_REACH_M = 0.8
 #: How high (m) over the surface the lane a thing came out of storage along stands for
 #: `idle_spot` (`way_out`): above its top, where the points of things count.
 LANE_ABOVE_M = 0.03
+#: How far apart (m) the stands along a side other than the front are tried (`Picks._clear_stand`).
+STAND_STEP_M = 0.05
 
 
 @dataclass(frozen=True)
 class Away:
     """A thing this robot picked away: its top grasp point where it stood (``grasp_point``), where
-    that point was put down (``placed_point``), its ``extent``, the base's x along the table's
-    edge when it was picked (``stand_x``), and how the hand held it (``grasp``, None where the
-    plan did not say)."""
+    that point was put down (``placed_point``) and its box in the memory there once put down
+    (``placed_bounds``), its ``extent``, where the base stood at the table's side to pick it
+    (``stand``), and how the hand held it (``grasp``, None where the plan did not say)."""
 
     grasp_point: np.ndarray
     placed_point: np.ndarray
+    placed_bounds: tuple[np.ndarray, np.ndarray]
     extent: np.ndarray
-    stand_x: float
+    stand: Pose2D
     grasp: ObjectGrasp | None = None
 
 
@@ -91,73 +98,151 @@ class Picks:
     def pick_away(self, obj: Instance) -> SkillResult:
         """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
         there is one, beyond the strip before the robot that the arm works over; where none is
-        free, on top of a thing it put out of the way before (`_on_a_thing_away`). Lifted out of
-        a door or drawer standing open, the wrist camera looks in again at what it covered
-        (`DoorsAndDrawers.look_again_into`).
+        free, on top of a thing it put out of the way before (`_on_a_thing_away`). The base stands
+        at the table's front, where the robot started; where no spot is free or no plan is found
+        from there, at the other sides of the table that the arm reaches the thing from, the
+        nearest first, unless the thing is in storage or a part this robot opened stands open
+        (`_sides`). Lifted out of a door or drawer standing open, the
+        wrist camera looks in again at what it covered (`DoorsAndDrawers.look_again_into`).
 
         Args:
             obj: the thing to move out of the way.
 
         Returns:
-            Whether it was put down there, and why not.
+            Whether it was put down there, and why not (from the first side tried).
 
         Raises:
             SkillPlanError: the robot has not looked yet (no `RobotBody.home`), there is no surface
-                under it or no free spot, or the base did not get to its stand; the last two say
-                how far out the thing stands where no stand brings it within the arm's reach (the
-                nests in storage at a table's back edge: no spot within reach of both is free).
+                under it or no table before the robot, or no free spot, or the base did not get to
+                its stand; the last two say how far out the thing stands where no side brings it
+                within the arm's reach (the nests in storage at a table's back: no spot within reach
+                of both is free).
         """
         body = self.body
         if body.home is None:
             raise SkillPlanError("the robot has not looked yet")
         points = obj.points()
         top, box = top_grasp_point(points), obj.bounds
-        surface = body.stood_on(obj)
-        if surface is None:
+        surface, table = body.stood_on(obj), body.table_sides()
+        if surface is None or table is None:
             raise SkillPlanError("no table or counter in memory to put the object down on")
         keep_off, table_top = self._near(obj), surface_top(surface)
         extent = standing_extent(points, np.vstack([keep_off, surface.points()]), floor_z=table_top)
         box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
-        toward = np.asarray(body.home[:2]) - top[:2]
+        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
+        obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
+        in_storage = under_a_board(top, extent, keep_off)
+        if in_storage:  # out of storage: not down in its way out
+            obstacles.append(way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M))
+        front_only = in_storage or bool(self.parts.standing_open())
+        first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
+        for side, grasp_along in self._sides(table, top, front_only):
+            try:
+                stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
+                                                     obstacles, radius)
+                self.parts.drive(stand)
+            except SkillPlanError as error:
+                level = table.stand(side, float(table.local(side, top[:2])[0, 0]))
+                first = first or (error, (level.x, level.y))
+                continue
+            places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
+            result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
+                              surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
+            if result.ok:
+                place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
+                body.memory.move(obj.id, _translation(place - top), carried=True)
+                self.away[obj.id] = Away(top, place, obj.bounds, extent, stand, result.info.get("grasp_way"))
+                self.vacated[obj.id] = box
+                self.parts.look_again_into(box)
+                return SkillResult(True)
+            first = first or (result, (stand.x, stand.y))
+            if not result.unplanned:
+                break  # the arm moved: the scene is no longer as the other sides would plan from
+        assert first is not None  # `_sides` gives one side at least
+        failure, stood = first
+        if isinstance(failure, SkillPlanError):  # say so where no side brings the thing within reach
+            raise SkillPlanError(f"{failure}{beyond_reach(top, stood)}") from None
+        return SkillResult(False, failure.reason + (beyond_reach(top, stood) if failure.unplanned else ""))
+
+    def _sides(self, table: TableSides, top: np.ndarray, front_only: bool = False
+               ) -> list[tuple[int, tuple[float, float]]]:
+        """The sides of ``table`` to pick the thing whose top grasp point is ``top`` from, each with
+        the interval along its line from which the arm reaches it (`PLACE_REACH_M`): the front
+        first, where the robot started, level with the thing where no stand along it is that near
+        (the arm may still reach it there, a little further out: it lifted nests 0.94 m out,
+        recursive 1064 of tuning-wide, and `beyond_reach` says how far out a thing stands where it
+        did not); then the other sides the arm reaches it from, the nearest first.
+
+        With ``front_only`` (a thing in storage, or a door or drawer this robot opened standing
+        open), the front alone: storage opens towards the front, and from the back a box in a
+        cabinet stood 0.4 m out behind the cabinet's back; the robot driving round the table
+        folded its arm into the handle of the door it had left open, and that door, come back to,
+        was not shut again (recursive 1243 of tuning-wide)."""
+        reaching = []
+        for side in SIDES:
+            (lo,), (hi,) = reach_along(table.local(side, top[:2]), table.line(side), PLACE_REACH_M)
+            if lo <= hi:
+                out = float(table.local(side, top[:2])[0, 1]) - table.line(side)
+                reaching.append((side != FRONT, out, side, (float(lo), float(hi))))
+        reaching.sort()
+        if not reaching or reaching[0][2] != FRONT:
+            level = float(table.local(FRONT, top[:2])[0, 0])
+            reaching.insert(0, (False, 0.0, FRONT, (level, level)))
+        return [(side, interval) for _, _, side, interval in reaching[:1 if front_only else None]]
+
+    def _stand_and_spots(self, obj: Instance, surface: Instance, table: TableSides, side: int,
+                         grasp_along: tuple[float, float], top: np.ndarray, extent: np.ndarray,
+                         obstacles: list[np.ndarray], radius: float) -> tuple[Pose2D, np.ndarray]:
+        """Where on ``side``'s line the base stands to pick ``obj`` (its arm reaching the object from
+        anywhere in ``grasp_along``) and the spots to put it down that the arm reaches from there,
+        nearest first (`_put_down_spots`): sought first towards the robot from the object (towards
+        where it started, at the front; elsewhere towards the side's line), beyond the strip before
+        the robot's start that its head camera does not see, as close to level with the object as
+        the spot allows.
+
+        Raises:
+            SkillPlanError: no spot is free (the reason the surface gives).
+        """
+        body = self.body
+        assert body.home is not None
+        line, (grasp_lo, grasp_hi) = table.line(side), grasp_along
+        toward_xy = body.home[:2] if side == FRONT else table.stand(side, float(table.local(side, top[:2])[0, 0]))[:2]
+        toward = np.asarray(toward_xy) - top[:2]
         near = top[:2] + self.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
-        edge_y = body.home[1]
-        (grasp_lo,), (grasp_hi,) = reach_along(top[:2], edge_y, PLACE_REACH_M)
-        if grasp_lo > grasp_hi:  # further out than that: from level with it, straight ahead, if at all
-            grasp_lo = grasp_hi = float(top[0])
 
         def reachable(places: np.ndarray) -> np.ndarray:
-            lo, hi = reach_along(places, edge_y, PLACE_REACH_M)
+            lo, hi = reach_along(table.local(side, places[:, :2]), line, PLACE_REACH_M)
             return np.maximum(lo, grasp_lo) <= np.minimum(hi, grasp_hi)
 
         def beyond_strip(places: np.ndarray) -> np.ndarray:
-            return reachable(places) & (places[:, 1] - edge_y >= body.head_sees_from)
+            ahead = table.local(FRONT, places[:, :2])[:, 1] - table.line(FRONT)
+            return reachable(places) & (ahead >= body.head_sees_from)
 
-        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
-        obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
-        if under_a_board(top, extent, keep_off):  # out of storage: not down in its way out
-            obstacles.append(way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M))
-        try:
-            spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
-            (place_lo,), (place_hi,) = reach_along(spots[0, :2], edge_y, PLACE_REACH_M)
-            stand_x = float(np.clip(top[0], max(grasp_lo, place_lo), min(grasp_hi, place_hi)))
-            lo, hi = reach_along(spots[:, :2], edge_y, PLACE_REACH_M)
-            spots = spots[(lo <= stand_x) & (stand_x <= hi)]  # the others the same stand reaches
-            self.parts.drive(Pose2D(stand_x, edge_y, body.home.yaw))
-        except SkillPlanError as error:  # say so where no stand brings the thing within reach
-            raise SkillPlanError(f"{error}{beyond_reach(top, (float(top[0]), edge_y))}") from None
-        places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
-        result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                          surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
-        if not result.ok:
-            out_of_reach = beyond_reach(top, (stand_x, edge_y)) if result.unplanned else ""
-            return SkillResult(False, result.reason + out_of_reach)
-        place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
-        body.memory.move(obj.id, _translation(place - top), carried=True)
-        self.away[obj.id] = Away(top, place, extent, stand_x, result.info.get("grasp_way"))
-        self.vacated[obj.id] = box
-        self.parts.look_again_into(box)
-        return SkillResult(True)
+        spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
+        (place_lo,), (place_hi,) = reach_along(table.local(side, spots[:1, :2]), line, PLACE_REACH_M)
+        lo_along, hi_along = max(grasp_lo, place_lo), min(grasp_hi, place_hi)
+        along = float(np.clip(table.local(side, top[:2])[0, 0], lo_along, hi_along))
+        if side != FRONT:
+            along = self._clear_stand(table, side, along, lo_along, hi_along)
+        lo, hi = reach_along(table.local(side, spots[:, :2]), line, PLACE_REACH_M)
+        return table.stand(side, along), spots[(lo <= along) & (along <= hi)]  # the others the same stand reaches
+
+    def _clear_stand(self, table: TableSides, side: int, level: float, lo: float, hi: float) -> float:
+        """The place along ``side``'s line, within [``lo``, ``hi``], nearest ``level``, every
+        `STAND_STEP_M`, where the arm comes out of the base clear of all that is remembered
+        (`unfold_problem`). Not asked at the front, whose strip before the robot is kept clear for
+        the arm; at the back the storage stands right before the base.
+
+        Raises:
+            SkillPlanError: no such place.
+        """
+        planner, near = self.body.planner(), self.body.points_near(())
+        for along in sorted(np.r_[level, np.arange(lo, hi + 1e-9, STAND_STEP_M)], key=lambda a: abs(a - level)):
+            if unfold_problem(planner, table.stand(side, float(along)), near) is None:
+                return float(along)
+        raise SkillPlanError(f"no stand at the table's {SIDE_NAMES[side]} from which the arm comes out of the base "
+                             "clear of what stands there")
 
     def _put_down_spots(self, obj: Instance, surface: Instance, obstacles: list[np.ndarray], radius: float,
                         near: np.ndarray, extent: np.ndarray, beyond_strip: Callable[[np.ndarray], np.ndarray],
@@ -233,7 +318,7 @@ class Picks:
         if away is None:
             return SkillResult(False, f"{obj.label} {obj.id} was not picked away by this robot")
         assert body.home is not None  # set by the look before the pick away
-        self.parts.drive(Pose2D(away.stand_x, body.home.y, body.home.yaw))
+        self.parts.drive(away.stand)
         result = self._put_back(obj, away)
         if not result.ok and result.steps_done:
             found = self._find_again(obj, away)
@@ -247,16 +332,21 @@ class Picks:
         """One run of the pick-back skill from where ``obj`` is now; the memory is told where it
         went when it went there.
 
-        Where the memory has the thing's top within `MOVED_M` across of where it was put down,
-        it still stands there, and the hand goes to that very point (at the height seen): held
-        where it was held when it was put down, it goes back as it came. Seen anew from the
-        side it stands at there, a box's top moved 1.7 cm in the memory, and put back by that
-        top, the box came down onto the wall of the smaller one it had covered."""
+        Where the memory has the thing within `MOVED_M` across of where it was put down, it still
+        stands there, and the hand goes to that very point (at the height seen): held where it was
+        held when it was put down, it goes back as it came. Seen anew from the side it stands at
+        there, a box's top moved 1.7 cm in the memory, and put back by that top, the box came down
+        onto the wall of the smaller one it had covered. How far it moved is how far both its
+        sides moved (`_moved`): a box seen whole once put down, 3 cm wider than where it stood
+        half hidden, was put back by its new middle, 3 cm beside where it stood (recursive 1117 of
+        tuning-wide)."""
         body = self.body
         points = obj.points()
         now = top_grasp_point(points) if len(points) else away.placed_point
-        if float(np.linalg.norm(now[:2] - away.placed_point[:2])) <= MOVED_M:
-            now = np.array([*away.placed_point[:2], now[2]])
+        moved = _moved(away.placed_bounds, obj.bounds) if len(points) else np.zeros(2)
+        if float(np.linalg.norm(moved)) <= MOVED_M:
+            moved = np.zeros(2)
+        now = np.array([*(away.placed_point[:2] + moved), now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point),  # under its place, below its top
                           label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
@@ -337,6 +427,14 @@ def beyond_reach(point: np.ndarray, stand_xy: tuple[float, float], reach_m: floa
     if out <= reach_m:
         return ""
     return f" ({out:.2f} m from the base's axis, beyond the arm's reach over a table, {reach_m:.2f} m)"
+
+
+def _moved(before: tuple[np.ndarray, np.ndarray], now: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """How far (x, y) a thing's box in the memory moved from ``before`` to ``now`` (each (lo, hi)):
+    along each axis, as far as both its sides moved the same way; a side that alone moved is the
+    memory seeing more or less of the thing, not the thing moving."""
+    lo, hi = (np.asarray(now[k][:2], dtype=float) - np.asarray(before[k][:2], dtype=float) for k in (0, 1))
+    return np.where(np.sign(lo) == np.sign(hi), np.sign(lo) * np.minimum(np.abs(lo), np.abs(hi)), 0.0)
 
 
 def _translation(offset: np.ndarray) -> np.ndarray:

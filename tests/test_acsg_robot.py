@@ -250,6 +250,14 @@ def test_a_wide_box_is_carried_round_a_cabinet_standing_between_its_place_and_it
     _explored_and_put_back("recursive", 1013)
 
 
+def test_a_nest_beyond_the_front_s_reach_is_lifted_from_the_table_s_back_and_put_back() -> None:
+    # recursive 1059 (tuning-wide): the nest stands 1.02 m from the front's line, beyond the arm's
+    # reach from there; from the back it stands 0.42 m out, but a drawer chest stands at the back
+    # edge right beside it, and an arm folded in before the chest swept a finger into it.
+    row = _explored_and_put_back("recursive", 1059)
+    assert row["graph_edit_distance"] == 0.0 and row["returned_to_start"]
+
+
 def test_a_box_goes_back_over_what_it_covered_without_touching_what_stands_beside_it() -> None:
     # recursive 1016 (tuning-wide): the clock the inner shell covered counted as a thing to keep off
     # while the shell came down over it again, so no route was checked clear; the unchecked carry

@@ -17,28 +17,28 @@ from test_robot_keep_off import NoWorld, _remember
 
 
 def _table_full_before(box_y: float) -> tuple[Robot, object]:
-    """A robot at a table's edge (y = -0.45) whose top is taken up to y = 0.4 by a tray, and a box
-    standing on the table beyond the tray at ``box_y``."""
+    """A robot before the front (y = -0.1) of a table 2.4 m across and 2 m deep, 0.35 m from it,
+    whose top is taken up to y = 0.8 by a tray, and a box standing on the table at ``box_y``."""
     robot = Robot(NoWorld())  # type: ignore[arg-type]
     robot.body.home = Pose2D(0.0, -0.45, math.pi / 2)
-    _remember(robot, "table", (0.0, 0.3, 0.745), (1.2, 0.8, 0.02))
-    _remember(robot, "tray", (0.0, 0.15, 0.8), (1.2, 0.5, 0.1))
+    _remember(robot, "table", (0.0, 0.9, 0.745), (2.4, 2.0, 0.02))
+    _remember(robot, "tray", (0.0, 0.35, 0.8), (2.4, 0.9, 0.1))
     box = _remember(robot, "box", (0.0, box_y, 0.8), (0.1, 0.1, 0.1))
     return robot, box
 
 
 def test_no_free_place_for_a_thing_beyond_reach_says_how_far_out_it_stands() -> None:
-    robot, box = _table_full_before(0.5)  # 0.95 m from the base's axis
+    robot, box = _table_full_before(0.9)  # 1.35 m from the front's and the back's stands, 1.55 m from the sides'
     with pytest.raises(SkillPlanError) as refused:
         robot.picks.pick_away(box)
     reason = str(refused.value)
     assert reason.startswith("idle spot: no free place"), reason
-    assert re.search(r"\(0\.9[56] m from the base's axis, beyond the arm's reach over a table, 0\.85 m\)$", reason), reason
+    assert re.search(r"\(1\.3[56] m from the base's axis, beyond the arm's reach over a table, 0\.85 m\)$", reason), reason
     assert action_cause(f"pick_away box (o{box.id}) FAILED: {reason}")[1] == "beyond the arm's reach"
 
 
 def test_no_free_place_for_a_thing_within_reach_is_short_of_idle_space() -> None:
-    robot, box = _table_full_before(0.2)  # on the tray's far part: 0.65 m out, and no place free
+    robot, box = _table_full_before(0.2)  # on the tray's far part: 0.65 m out, and no place free in reach
     with pytest.raises(SkillPlanError) as refused:
         robot.picks.pick_away(box)
     reason = str(refused.value)

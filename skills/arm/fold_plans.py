@@ -1,5 +1,6 @@
 """Plans for folding the arm: a free joint-space move to given joint positions, and stowing the
-arm into the base from wherever it is, a hand left out among things first backed straight out.
+arm into the base from wherever it is, a hand left out among things first backed straight out;
+and whether the arm comes out of the base clear of what stands before a stand (`unfold_problem`).
 """
 
 from __future__ import annotations
@@ -11,10 +12,15 @@ import numpy as np
 
 from agent.pose import Pose2D
 from skills.arm.arm_model import ArmModel
+from skills.arm.clearance import Clearance
+from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import backed_off
 from skills.arm.ik_search import IKSearch
 from skills.arm.plan_builder import FOLDED_RAD, PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError
+
+#: How many postures of the way between the stowed and the ready pose `unfold_problem` checks.
+UNFOLD_SAMPLES = 24
 
 
 def plan_joint_move(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, goal: Sequence[float], *,
@@ -88,3 +94,25 @@ def plan_stow(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, *, surface_z: flo
     # stops on any contact stops at its first sample there, and every drive after it is refused
     builder.steps[-1] = replace(builder.steps[-1], stop_on_contact=False, stop_on_new_contact=True)
     return builder.finish(skill, {"goal": arm.stowed}, ik)
+
+
+def unfold_problem(arm: ArmModel, base_pose: Pose2D, near: np.ndarray) -> str | None:
+    """What the arm would touch coming out of the base to the ready pose, with the base at
+    ``base_pose``, or going back in: every skill's way out of the base and back into it
+    (`PlanBuilder.free_move`), which no plan checks. Before a table's front the strip the arm
+    works over is kept clear, but at its back the storage stands right before the base: an arm
+    folded in there swept a finger into a drawer chest (recursive 1059 of tuning-wide).
+
+    Args:
+        arm: the arm, with a stowed pose.
+        base_pose: where the base would stand.
+        near: (N, 3) points of what stands near (world).
+
+    Returns:
+        What the links would touch on the way, in words (`Clearance.problem`); None for nothing,
+        or where the robot names no stowed pose.
+    """
+    if arm.stowed is None:
+        return None
+    way = np.linspace(arm.stowed, arm.ready, UNFOLD_SAMPLES)
+    return Clearance(arm, base_transform(base_pose), None, near).path_problem(way, hand=True)
