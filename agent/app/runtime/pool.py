@@ -10,7 +10,8 @@ Ctrl-C is the caller's to handle: workers ignore SIGINT (they are spawned with i
 that comes while they start and import waits until `quiet_worker` ignores it), and on it the caller
 cancels the calls not yet started and ends the running ones (SIGTERM, which a worker turns into
 SystemExit so that its cleanup, a world child's shutdown included, runs; SIGKILL for one that does
-not end within a few seconds), keeping what finished.
+not end within a few seconds), keeping what finished. A caller killed from outside signals no
+worker: each worker ends itself once its parent is gone.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import atexit
 import multiprocessing
 import os
 import signal
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -106,10 +108,23 @@ def in_processes(function: Callable[..., Result], calls: Sequence[tuple[Any, ...
 def quiet_worker() -> None:
     """Worker initialiser: leave Ctrl-C (SIGINT) to the parent; on SIGTERM run the exit handlers (a
     world child's shutdown among them) and end the process. Not by SystemExit: the pool's worker
-    loop catches that as the call's error and would go on serving."""
+    loop catches that as the call's error and would go on serving. A worker whose parent has ended
+    ends too (`_end_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # spawned with it blocked: `sigint_held`
     signal.signal(signal.SIGTERM, _end_worker)
+    threading.Thread(target=_end_with_parent, args=(os.getppid(),), name="end-with-parent", daemon=True).start()
+
+
+def _end_with_parent(parent: int, period_s: float = 0.5) -> None:
+    """End this worker (as SIGTERM does) once its parent is no longer ``parent``: a pool's caller
+    killed from outside (``kill``, a scheduler, the machine short of memory) signals none of its
+    workers, and they went on with their calls and then waited for more, each holding its memory
+    and its world, for as long as the machine ran."""
+    while True:
+        time.sleep(period_s)
+        if os.getppid() != parent:
+            _end_worker()
 
 
 @contextmanager
