@@ -32,8 +32,8 @@ _HOST_PORT = re.compile(r"^(?P<protocol>tcp|udp|tls|quic)/(?P<host>\[[^\]]+\]|[^
 #: Zenoh's shared memory is off: each process that sent a message over 3 kB made a 16 MB segment in
 #: /dev/shm that outlived a process killed or ended by a worker pool, and an evaluation of 280
 #: scenes left 560 of them, 9 GB of memory, until a worker was killed for want of memory.
-OWN_KEYS = ("mode", "scouting/multicast/enabled", "listen/endpoints", "connect/endpoints",
-            "transport/shared_memory/enabled")
+SHARED_MEMORY = "transport/shared_memory/enabled"
+OWN_KEYS = ("mode", "scouting/multicast/enabled", "listen/endpoints", "connect/endpoints", SHARED_MEMORY)
 
 
 class EndpointError(ValueError):
@@ -99,8 +99,8 @@ def load_zenoh_config(path: str | Path) -> zenoh.Config:
 def session_config(listen: list[str] | None = None, connect: list[str] | None = None,
                    zenoh_config: str | Path | None = None) -> tuple[zenoh.Config, list[str]]:
     """The configuration of a peer session on the given endpoints: the Zenoh configuration file's,
-    with homebot's keys (`OWN_KEYS`) set where the file leaves them out (its value is Zenoh's
-    default and its text does not name the key).
+    with homebot's keys (`OWN_KEYS`) set where the file leaves them out: where its value is Zenoh's
+    default, and for shared memory (on by default) where the file's text does not name the key.
 
     Args:
         listen: the endpoints to listen on.
@@ -117,12 +117,13 @@ def session_config(listen: list[str] | None = None, connect: list[str] | None = 
     ours = {"mode": "peer", "scouting/multicast/enabled": False,
             "listen/endpoints": [check_endpoint(e) for e in listen or []],
             "connect/endpoints": [check_endpoint(e) for e in connect or []],
-            "transport/shared_memory/enabled": False}
+            SHARED_MEMORY: False}
     config = load_zenoh_config(zenoh_config) if zenoh_config else zenoh.Config()
     defaults = zenoh.Config()
     text = Path(zenoh_config).read_text(errors="replace") if zenoh_config else ""
     for key in OWN_KEYS:
-        if zenoh_config and (config.get_json(key) != defaults.get_json(key) or _names(text, key)):
+        if zenoh_config and (config.get_json(key) != defaults.get_json(key)
+                             or key == SHARED_MEMORY and _names(text, key)):
             log.info("%s from %s (%s) is used instead of homebot's (%s)", key, zenoh_config,
                      config.get_json(key), json.dumps(ours[key]))
             continue
@@ -135,7 +136,7 @@ def session_config(listen: list[str] | None = None, connect: list[str] | None = 
 
 def _names(text: str, key: str) -> bool:
     """Whether a Zenoh configuration file's ``text`` names every part of ``key`` in turn: a file
-    may set a key to Zenoh's default (shared memory on), which its value alone does not tell."""
+    may set shared memory on, Zenoh's default, which its value alone does not tell."""
     at = 0
     for part in key.split("/"):
         at = text.find(part, at)
