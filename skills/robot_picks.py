@@ -102,14 +102,15 @@ class Picks:
         at the table's front, where the robot started; where no spot is free or no plan is found
         from there, at the other sides of the table that the arm reaches the thing from, the
         nearest first, unless the thing is in storage or a part this robot opened stands open
-        (`_sides`). Lifted out of a door or drawer standing open, the
-        wrist camera looks in again at what it covered (`DoorsAndDrawers.look_again_into`).
+        (`_sides`). Lifted out of a door or drawer standing open, the wrist camera looks in again
+        at what it covered (`DoorsAndDrawers.look_again_into`).
 
         Args:
             obj: the thing to move out of the way.
 
         Returns:
-            Whether it was put down there, and why not (from the first side tried).
+            Whether it was put down there, and why not: why the run that moved the arm failed,
+            else why the first side tried failed.
 
         Raises:
             SkillPlanError: the robot has not looked yet (no `RobotBody.home`), there is no surface
@@ -156,9 +157,10 @@ class Picks:
                 self.vacated[obj.id] = box
                 self.parts.look_again_into(box)
                 return SkillResult(True)
+            if not result.unplanned:  # the arm moved: the scene is no longer as the other sides would plan from
+                first = (result, (stand.x, stand.y))
+                break
             first = first or (result, (stand.x, stand.y))
-            if not result.unplanned:
-                break  # the arm moved: the scene is no longer as the other sides would plan from
         assert first is not None  # `_sides` gives one side at least
         failure, stood = first
         if isinstance(failure, SkillPlanError):  # say so where no side brings the thing within reach
