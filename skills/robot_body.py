@@ -273,7 +273,14 @@ class RobotBody:
             return None
 
     def nearest_surface(self, pose: Pose2D) -> Instance | None:
-        """The remembered table or counter nearest the base standing at ``pose``, or None."""
+        """The remembered table or counter nearest the base standing at ``pose``.
+
+        Args:
+            pose: where the base stands (its x, y count).
+
+        Returns:
+            The surface, or None where none is remembered.
+        """
         surfaces = self.surfaces()
         if not surfaces:
             return None

@@ -76,21 +76,51 @@ class TableSides:
         return cls(turn @ middle, (hi - lo) / 2, float(start.yaw), standoff)
 
     def facing(self, side: int) -> float:
-        """The base's yaw standing at ``side``, facing the table."""
+        """The base's yaw standing at ``side``, facing the table.
+
+        Args:
+            side: `FRONT`, `RIGHT`, `BACK` or `LEFT`.
+
+        Returns:
+            The yaw (radians, in (-π, π]).
+        """
         return math.remainder(self.heading + side * math.pi / 2, math.tau)
 
     def local(self, side: int, xy: np.ndarray) -> np.ndarray:
-        """(N, 2) world points as (along, out) in ``side``'s frame: along its line, and towards the
-        table from its middle; the base stands at out = `line` (``side``) facing +out."""
+        """World points in ``side``'s frame: along its line, and towards the table from the
+        table's middle; the base stands at out = `line` (``side``) facing +out.
+
+        Args:
+            side: `FRONT`, `RIGHT`, `BACK` or `LEFT`.
+            xy: (N, 2) or (2,) world points (x, y).
+
+        Returns:
+            (N, 2) of (along, out).
+        """
         turn = _rotation(self.facing(side))
         return (np.atleast_2d(np.asarray(xy, dtype=float)) - self.centre) @ turn
 
     def line(self, side: int) -> float:
-        """Where (``out`` of `local`) the base's axis stands at ``side``: the standoff before it."""
+        """Where the base's axis stands at ``side``: the standoff before it.
+
+        Args:
+            side: `FRONT`, `RIGHT`, `BACK` or `LEFT`.
+
+        Returns:
+            Its ``out`` in `local`'s frame (m, negative: before the table's middle).
+        """
         return -(float(self.half[1 if side % 2 == 0 else 0]) + self.standoff)
 
     def stand(self, side: int, along: float) -> Pose2D:
-        """The base's pose at ``along`` on ``side``'s line, facing the table."""
+        """The base's pose on ``side``'s line, facing the table.
+
+        Args:
+            side: `FRONT`, `RIGHT`, `BACK` or `LEFT`.
+            along: where along the line (m, `local`'s ``along``).
+
+        Returns:
+            The pose (world).
+        """
         turn = _rotation(self.facing(side))
         x, y = self.centre + turn @ np.array([along, self.line(side)])
         return Pose2D(float(x), float(y), self.facing(side))
@@ -99,6 +129,10 @@ class TableSides:
         """The shortest way from ``start_xy`` to ``goal_xy`` that keeps the base's axis out of the
         footprint grown by the standoff (less `PASS_MARGIN_M`): straight where that passes, else
         by the corners of the stands' lines, round the side the way is shorter.
+
+        Args:
+            start_xy: where the base's axis is (world x, y).
+            goal_xy: where it is to go.
 
         Returns:
             The waypoints after the start, ``goal_xy`` last.
