@@ -144,7 +144,7 @@ class Picks:
                                                      obstacles, radius)
                 self.parts.drive(stand)
             except SkillPlanError as error:
-                level = table.stand(side, float(table.local(side, top[:2])[0, 0]))
+                level = table.stand(side, table.along(side, top))
                 first = first or (error, (level.x, level.y))
                 continue
             places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
@@ -189,7 +189,7 @@ class Picks:
                 reaching.append((side != FRONT, out, side, (float(lo), float(hi))))
         reaching.sort()
         if not reaching or reaching[0][2] != FRONT:
-            level = float(table.local(FRONT, top[:2])[0, 0])
+            level = table.along(FRONT, top)
             reaching.insert(0, (False, 0.0, FRONT, (level, level)))
         return [(side, interval) for _, _, side, interval in reaching[:1 if front_only else None]]
 
@@ -209,7 +209,7 @@ class Picks:
         body = self.body
         assert body.home is not None
         line, (grasp_lo, grasp_hi) = table.line(side), grasp_along
-        toward_xy = body.home[:2] if side == FRONT else table.stand(side, float(table.local(side, top[:2])[0, 0]))[:2]
+        toward_xy = body.home[:2] if side == FRONT else table.stand(side, table.along(side, top))[:2]
         toward = np.asarray(toward_xy) - top[:2]
         near = top[:2] + self.idle_toward_robot_m * toward / max(float(np.linalg.norm(toward)), 1e-6)
 
@@ -224,7 +224,7 @@ class Picks:
         spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
         (place_lo,), (place_hi,) = reach_along(table.local(side, spots[:1, :2]), line, PLACE_REACH_M)
         lo_along, hi_along = max(grasp_lo, place_lo), min(grasp_hi, place_hi)
-        along = float(np.clip(table.local(side, top[:2])[0, 0], lo_along, hi_along))
+        along = float(np.clip(table.along(side, top), lo_along, hi_along))
         if side != FRONT:
             along = self._clear_stand(table, side, along, lo_along, hi_along)
         lo, hi = reach_along(table.local(side, spots[:, :2]), line, PLACE_REACH_M)

@@ -100,6 +100,18 @@ class TableSides:
         turn = _rotation(self.facing(side))
         return (np.atleast_2d(np.asarray(xy, dtype=float)) - self.centre) @ turn
 
+    def along(self, side: int, xy: np.ndarray) -> float:
+        """Where along ``side``'s line a point stands level with it.
+
+        Args:
+            side: `FRONT`, `RIGHT`, `BACK` or `LEFT`.
+            xy: a world point (its x, y count).
+
+        Returns:
+            `local`'s ``along`` of the point (m).
+        """
+        return float(self.local(side, np.asarray(xy, dtype=float)[:2])[0, 0])
+
     def line(self, side: int) -> float:
         """Where the base's axis stands at ``side``: the standoff before it.
 
