@@ -318,6 +318,33 @@ def test_a_picked_object_moves_with_the_hand_and_stays_where_it_is_put_down() ->
         world.close()
 
 
+def test_a_thing_just_grasped_begins_against_what_it_stands_on() -> None:
+    """Right after the grasp the can on the table has no contact stepped yet: what a move that
+    stops only on new contacts begins against is found from the shapes, so the table the can
+    stands on is among it (a box's lift off a drawer's floor stopped on that floor as on something
+    new, recursive 1050 of tuning-wide)."""
+    scene = tabletop_variant("drawer-only", 6)
+    can = next(obj for obj in scene.objects if obj.category == "can")
+    scene = _with_moved(scene, {can.instance_id: dataclasses.replace(can, center=(0.0, -0.22, can.center[2]))})
+    world = World(CameraConfig())
+    ik = _IK(world.start_tabletop(scene))
+    try:
+        top = np.array(world.object_position(can.instance_id)) + [0.0, 0.0, can.dims[1] / 2]
+        _go(world, READY)
+        _line(world, ik, ik.solve(READY, top + [0, 0, 0.2], DOWN), [top + [0, 0, 0.2 - 0.04 * k] for k in range(1, 6)],
+              DOWN)
+        assert world.gripper(close=True)["id"] == can.instance_id
+        labels = world.stage.built.labels
+        table = next(body for body, link in labels if labels[(body, link)]["category"] == "table")
+        assert all(t.robot_link != "held object" for t in world.body.arm.touches(deeper_than=0.0))
+        began = [t for t in world.body.arm.touching() if t.robot_link == "held object"]
+        assert [t.body for t in began] and {t.body for t in began} == {table}
+        assert all(abs(t.depth) <= 1e-3 for t in began)
+    finally:
+        ik.close()
+        world.close()
+
+
 @contextlib.contextmanager
 def _can_carried_into_a_drawer() -> Iterator[tuple[World, _IK, np.ndarray, Callable[[], float]]]:
     """A world whose hand holds a can level with a chest's closed bottom drawer, in front of its

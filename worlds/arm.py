@@ -47,6 +47,9 @@ HELD_LINK = "held object"
 #: How much deeper (m) than when a move began a contact it began with must press to stop a move
 #: that stops only on new contacts (`Arm.follow`'s ``stop_on_new_contact``).
 PRESSED_DEEPER_M = 2e-3
+#: How close (m) a link or what the hand carries must be to a thing for a move to begin against it
+#: (`Arm.touching`).
+TOUCHING_M = 1e-3
 
 Pose = np.ndarray  # 4x4
 OnStep = Callable[[], None]
@@ -253,7 +256,7 @@ class Arm:
         worst, done, stopped = 0.0, 0, False
         touches: dict[tuple[str, int, int], Touch] = {}
         began: dict[tuple[str, int, int], float] = {}  # what a move stopping on new contacts began against
-        for touch in self.touches(deeper_than=0.0) if stop_on_new_contact else ():
+        for touch in self.touching() if stop_on_new_contact else ():
             if not ignore(touch.body, touch.link):
                 began[touch.between] = min(began.get(touch.between, 0.0), touch.depth)
         began_on = {(body, link) for _, body, link in began}
@@ -315,6 +318,32 @@ class Arm:
             for point in p.getContactPoints(bodyA=self.grip.body, physicsClientId=self.client):
                 if point[2] != self.body and point[8] <= deeper_than:
                     found.append(Touch(HELD_LINK, point[2], point[4], float(point[8])))
+        return found
+
+    def touching(self) -> list[Touch]:
+        """What the robot's links (all but the base) and what the hand carries touch, or come within
+        `TOUCHING_M` of, as they stand now, found from their shapes rather than from the last
+        step's contacts: a box just grasped from a drawer's floor, resting on it, had no contact
+        reported, and its lift, pressing a millimetre into that floor as it began, stopped on it
+        as on something new (recursive 1050 of tuning-wide).
+
+        Returns:
+            The touches; a depth is the distance between the shapes (m, negative: penetration).
+        """
+        ours = [(self.body, self.link_names)]
+        if self._carry is not None and self.grip is not None:
+            ours.append((self.grip.body, None))
+        found = []
+        for own, names in ours:
+            for other in range(p.getNumBodies(physicsClientId=self.client)):
+                other = p.getBodyUniqueId(other, physicsClientId=self.client)
+                if other in (self.body, own):
+                    continue
+                for point in p.getClosestPoints(own, other, TOUCHING_M, physicsClientId=self.client):
+                    if names is None:
+                        found.append(Touch(HELD_LINK, other, point[4], float(point[8])))
+                    elif point[3] >= 0:
+                        found.append(Touch(names[point[3]], other, point[4], float(point[8])))
         return found
 
     # -- gripper -------------------------------------------------------------------------------
