@@ -258,6 +258,29 @@ def test_a_nest_beyond_the_front_s_reach_is_lifted_from_the_table_s_back_and_put
     assert row["graph_edit_distance"] == 0.0 and row["returned_to_start"]
 
 
+def test_a_short_box_in_a_drawer_is_taken_as_tall_as_it_stands_lifted_over_the_front_and_put_back() -> None:
+    # recursive 1264 (tuning-wide): a box 5 cm tall in a chest's top drawer, seen from above only,
+    # was taken 17 cm tall, down to what the memory had seen under it before the drawer was
+    # pulled out; then lifted the usual 15 cm, its bottom stood lower than the drawer's front,
+    # 6 cm before it and 13 cm over its top, and no route was clear.
+    assert _explored_and_put_back("recursive", 1264)["graph_edit_distance"] == 0.0
+
+
+def test_a_tall_box_in_a_drawer_lifts_off_the_drawer_s_floor_it_began_on() -> None:
+    # recursive 1050 (tuning-wide): a box 14 cm tall in a drawer, lifted only as high as the rim
+    # sought 3 cm round it, was carried into the drawer's front (its bottom 1.5 cm under the
+    # front's top, which no check counted), and lifted higher, it stopped at once on the drawer's
+    # floor it stood on, pressed a millimetre into it by the fingertips on its top.
+    assert _explored_and_put_back("recursive", 1050)["graph_edit_distance"] == 0.0
+
+
+def test_a_box_lifted_off_another_is_put_down_out_of_the_way_to_it() -> None:
+    # recursive 1154 (tuning-wide): the outer box, put down between the robot and the nest, held up
+    # the forearm reaching over it for the inner box without a contact deep enough to report, and
+    # the fingers closed on nothing over the inner box.
+    assert _explored_and_put_back("recursive", 1154)["graph_edit_distance"] == 0.0
+
+
 def test_a_box_goes_back_over_what_it_covered_without_touching_what_stands_beside_it() -> None:
     # recursive 1016 (tuning-wide): the clock the inner shell covered counted as a thing to keep off
     # while the shell came down over it again, so no route was checked clear; the unchecked carry

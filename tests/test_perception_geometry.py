@@ -15,6 +15,7 @@ from agent.perception.directions import GeometryError, front_normal, principal_a
 from agent.perception.grasp_poses import (
     LEAST_EXTENT_M,
     closing_waypoints,
+    drawer_floor,
     grasp_pose,
     opening_waypoints,
     pregrasp_pose,
@@ -306,3 +307,40 @@ def test_a_thing_on_a_table_reaches_no_lower_than_the_tables_top() -> None:
     assert standing_extent(box, leg, floor_z=0.755)[2] == pytest.approx(box[:, 2].max() - 0.755)
     floor = np.column_stack([rng.uniform(0.46, 0.59, (50, 2)) * [1, 0] + [0, -0.3], np.full(50, 0.76)])
     assert standing_extent(box, np.vstack([leg, floor]), floor_z=0.755)[2] == pytest.approx(box[:, 2].max() - 0.76)
+
+
+def _open_drawer(floor_z: float = 0.98, top_z: float = 1.17) -> np.ndarray:
+    """A drawer pulled out, as the memory has it: its floor (x 0.34-0.67, y -0.04-0.2), its front
+    (y -0.06, from 2 cm under the floor to ``top_z``) and its side walls, 1 cm voxels."""
+    xs, ys = np.meshgrid(np.arange(0.34, 0.675, 0.01), np.arange(-0.04, 0.205, 0.01))
+    floor = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, floor_z)])
+    xs, zs = np.meshgrid(np.arange(0.34, 0.675, 0.01), np.arange(floor_z - 0.02, top_z + 0.005, 0.01))
+    front = np.column_stack([xs.ravel(), np.full(xs.size, -0.06), zs.ravel()])
+    ys, zs = np.meshgrid(np.arange(-0.04, 0.205, 0.01), np.arange(floor_z, top_z + 0.005, 0.01))
+    sides = [np.column_stack([np.full(ys.size, x), ys.ravel(), zs.ravel()]) for x in (0.34, 0.67)]
+    return np.vstack([floor, front, *sides])
+
+
+def test_a_box_in_an_open_drawer_reaches_down_to_the_drawer_s_floor_showing_around_it() -> None:
+    """A box 5 cm tall in a drawer, seen from above only (one layer of points at its top), the
+    drawer's floor showing around it, and under it what the memory saw there before the drawer was
+    pulled out over it, 12 cm lower (recursive 1264 of tuning-wide: taken 17 cm tall). It reaches
+    down to the floor; the drawer's front and walls, which spread one way each, are not its floor."""
+    xs, ys = np.meshgrid(np.arange(0.47, 0.605, 0.01), np.arange(0.02, 0.095, 0.01))
+    box = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 1.035)])
+    drawer = _open_drawer()
+    covered = (drawer[:, 0] > 0.46) & (drawer[:, 0] < 0.61) & (drawer[:, 1] > 0.01) & (drawer[:, 1] < 0.1) \
+        & (drawer[:, 2] < 0.99)
+    drawer = drawer[~covered]  # the box hides the floor under it
+    stale = box - [0.0, 0.0, 0.17]
+    assert drawer_floor(box, drawer) == (pytest.approx(0.98), True)
+    assert standing_extent(box, stale, floor_z=0.755)[2] == pytest.approx(0.17)
+    assert standing_extent(box, stale, floor_z=0.755, stands_on_z=0.98)[2] == pytest.approx(1.035 - 0.98)
+    # the floor hidden all round (a box filling the drawer), the drawer's lowest point bounds it
+    walls_only = drawer[drawer[:, 2] > 0.985]
+    low = drawer_floor(box, np.vstack([walls_only, drawer[drawer[:, 1] < -0.05]]))
+    assert low == (pytest.approx(0.96), False)
+    # a thing on the chest's top over the drawer, or beside the drawer, stands in no drawer
+    assert drawer_floor(box + [0.0, 0.0, 0.2], drawer) is None
+    assert drawer_floor(box + [0.5, 0.0, 0.0], drawer) is None
+    assert drawer_floor(box, np.zeros((0, 3))) is None

@@ -149,7 +149,7 @@ SUPPORT_BELOW_M, SUPPORT_INSET_M = 0.2, 0.01
 
 
 def standing_extent(points: np.ndarray, others: np.ndarray | None, least_m: float = LEAST_EXTENT_M,
-                    floor_z: float | None = None) -> np.ndarray:
+                    floor_z: float | None = None, stands_on_z: float | None = None) -> np.ndarray:
     """`seen_extent`, its height reaching down to what the object stands on.
 
     From the robot's cameras an object's lower part is often hidden (a box standing in a cabinet,
@@ -168,12 +168,18 @@ def standing_extent(points: np.ndarray, others: np.ndarray | None, least_m: floa
             its voxels were carried 12 cm over where it stood, and the few the next view did not
             look through drew its top, and the pick back's grasp, 9 cm aside (recursive 1250 of
             tuning-wide). None: no such bound.
+        stands_on_z: the top of what the object is seen to stand on (a drawer's floor showing
+            around it, `drawer_floor`), down to which it reaches whatever the memory has under it;
+            None: sought among ``others``.
 
     Returns:
         (dx, dy, dz), each at least ``least_m``.
     """
     pts = checked_points(points, "points", minimum=1)
     extent = seen_extent(pts, least_m)
+    if stands_on_z is not None:
+        extent[2] = max(float(pts[:, 2].max() - stands_on_z), least_m)
+        return extent
     if others is None or not len(others):
         return extent
     lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -185,6 +191,50 @@ def standing_extent(points: np.ndarray, others: np.ndarray | None, least_m: floa
     support = float(near[under, 2].max()) if floor_z is None else max(float(near[under, 2].max()), floor_z)
     extent[2] = max(float(hi[2] - support), least_m)
     return extent
+
+
+#: How far (m) around an object's footprint the floor of a drawer it stands in is sought, and how
+#: far a level of the drawer's points must spread both ways to be its floor (not its front or sides).
+FLOOR_AROUND_M, FLOOR_SPREAD_M = 0.04, 0.03
+
+
+def drawer_floor(points: np.ndarray, drawer: np.ndarray) -> tuple[float, bool] | None:
+    """How low an object standing in an open drawer reaches: down to the drawer's floor where that
+    shows around it (`FLOOR_AROUND_M`) below its lowest seen point, else no lower than the
+    drawer's lowest point. Seen from above in a drawer, a box shows only its top, and what the
+    memory has under its footprint was seen there before the drawer was pulled out over it: a box
+    5 cm tall reached down to the drawer below and was taken 17 cm tall (recursive 1264 of
+    tuning-wide), one 14 cm tall 28 (recursive 1103), and one 7 cm tall, with nothing under it,
+    2 (recursive 1279).
+
+    Args:
+        points: (N, 3) points of the object, at least 1.
+        drawer: (M, 3) points of the drawer, as it stands now.
+
+    Returns:
+        (height, seen): the floor's top and True, or the drawer's lowest point and False; None
+        where the object does not stand in the drawer (its middle outside the drawer's footprint,
+        or its lowest point not below the drawer's highest: on the chest's top).
+    """
+    pts = checked_points(points, "points", minimum=1)
+    near = np.asarray(drawer, dtype=float).reshape(-1, 3)
+    if not len(near):
+        return None
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    middle = (lo[:2] + hi[:2]) / 2
+    if np.any(middle < near[:, :2].min(axis=0)) or np.any(middle > near[:, :2].max(axis=0)) \
+            or lo[2] >= near[:, 2].max():
+        return None
+    around = np.all((near[:, :2] >= lo[:2] - FLOOR_AROUND_M) & (near[:, :2] <= hi[:2] + FLOOR_AROUND_M), axis=1)
+    below = near[around & (near[:, 2] < lo[2])]
+    levels, counts = np.unique(np.round(below[:, 2], 3), return_counts=True)
+    # the floor is a layer: of the levels that spread both ways, the one with the most points (a
+    # front and a side wall near the object spread both ways too, a line each)
+    spread = [np.all(np.ptp(below[np.round(below[:, 2], 3) == level][:, :2], axis=0) >= FLOOR_SPREAD_M)
+              for level in levels]
+    if any(spread):
+        return float(levels[np.flatnonzero(spread)[np.argmax(counts[spread])]]), True
+    return float(near[:, 2].min()), False
 
 
 def _steps(geometry: PartGeometry, amount: float, n: int | None) -> int:

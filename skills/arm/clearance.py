@@ -166,7 +166,8 @@ class Clearance:
         """
         return np.vstack(self.sphere_sets(q))
 
-    def problem(self, q: np.ndarray, carried: Carried | None = None, hand: bool = False) -> str | None:
+    def problem(self, q: np.ndarray, carried: Carried | None = None, hand: bool = False,
+                lifted: bool = False) -> str | None:
         """What the links would touch with the arm at ``q``, in words; None when nothing.
 
         Args:
@@ -174,6 +175,10 @@ class Clearance:
             carried: what the hand holds, or None.
             hand: whether the hand and its open fingers count too (`skills.arm.grasps.HAND_BOXES`):
                 on the way to a grasp, not at it.
+            lifted: whether what the hand carries is lifted clear of what it stood on and of where
+                it goes, so that its bottom (`SUPPORT_M`) counts too: a box carried out of a drawer
+                with its bottom 1.5 cm under the top of the drawer's front went through it
+                (recursive 1050 of tuning-wide).
 
         Returns:
             The reason, or None.
@@ -204,7 +209,8 @@ class Clearance:
             if self.tree is not None:
                 corners = carried.world_corners(tcp)
                 lo, hi = corners.min(axis=0) - self.clearance, corners.max(axis=0) + self.clearance
-                lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
+                if not lifted:
+                    lo[2] += self.clearance + SUPPORT_M  # what it stands on, or is lifted off
                 middle, half = (lo + hi) / 2, (hi - lo) / 2
                 near = self.tree.query_ball_point(middle, float(np.linalg.norm(half)))
                 if near and int((_outside(self.tree.data[near], lo, hi) <= 0.0).sum()) >= TOUCHING_POINTS:

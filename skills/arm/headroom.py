@@ -18,6 +18,10 @@ CONFINED_M = 0.3
 #: What stands within this much (m) around an object's box, up to `RIM_ABOVE_M` over its top, is a
 #: rim the object is lifted over before it is carried (`over_the_rim`): the drawer it stands in.
 RIM_M, RIM_ABOVE_M = 0.03, 0.08
+#: How much further (m) the rim is looked for on the side the object is drawn out by: the front of
+#: the drawer a box stood in, 6 cm beyond its near side, which the memory had 2 cm short, hidden
+#: behind that front (recursive 1264 of tuning-wide).
+RIM_OUT_M = 0.1
 
 
 def under_a_board(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, lift_m: float = LIFT_M) -> bool:
@@ -57,23 +61,48 @@ def headroom(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None, wit
     return float(over[:, 2].min() - top[2]) if len(over) else np.inf
 
 
-def over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None) -> float:
+def over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None,
+                 out: np.ndarray | None = None) -> float:
     """How high (m) the object, its top at ``top``, must be lifted for its bottom to clear, by
-    `LIFT_SPARE_M`, what stands around it (`RIM_M`, `RIM_ABOVE_M`): a box 14 cm tall in a
-    drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm over its top,
-    and carried back into it the same way (recursive 1050 of tuning-wide).
+    `LIFT_SPARE_M`, what stands around it (`RIM_M`, up to `RIM_ABOVE_M` over its top): a box 14
+    cm tall in a drawer, lifted the usual 15 cm, was drawn out through the drawer's front, 6 cm
+    over its top, and carried back into it the same way (recursive 1050 of tuning-wide). On the
+    side it is drawn out by, `RIM_OUT_M` further, what stands lower than the usual lift over its
+    top counts too: the front of the drawer a box 5 cm tall stood in rose 13 cm over its top.
 
     Args:
         top: the middle of the object's top (world).
         size: its box (dx, dy, dz).
         keep_off: (N, 3) points of what stands near, or None.
+        out: the level unit vector it is drawn out along (towards the robot), or None.
 
     Returns:
         The lift (m); 0 where nothing stands around it.
     """
     bottom = float(top[2] - size[2])
     around = _column(keep_off, top, size[:2] / 2 + RIM_M, bottom + LIFT_SPARE_M, top[2] + RIM_ABOVE_M)
+    if out is not None and len(ahead := _ahead(keep_off, top, size, out, bottom + LIFT_SPARE_M, top[2] + LIFT_M)):
+        around = np.vstack([around, ahead])
     return float(around[:, 2].max() - bottom + LIFT_SPARE_M) if len(around) else 0.0
+
+
+def _ahead(keep_off: np.ndarray | None, top: np.ndarray, size: np.ndarray, out: np.ndarray, low: float,
+           high: float) -> np.ndarray:
+    """The points of ``keep_off`` between the heights ``low`` and ``high`` in the strip `RIM_OUT_M`
+    long beyond `RIM_M` from the object's side along ``out`` (a level unit vector), as wide as
+    the object and `RIM_M` either side (`over_the_rim`)."""
+    if keep_off is None or not len(keep_off):
+        return np.zeros((0, 3))
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    along = np.asarray(out, dtype=float)[:2]
+    side = np.array([-along[1], along[0]])
+    half_along = float(np.abs(size[:2] / 2) @ np.abs(along))
+    half_across = float(np.abs(size[:2] / 2) @ np.abs(side))
+    offsets = points[:, :2] - np.asarray(top, dtype=float)[:2]
+    ahead, across = offsets @ along, np.abs(offsets @ side)
+    inside = ((ahead > half_along + RIM_M) & (ahead <= half_along + RIM_M + RIM_OUT_M)
+              & (across <= half_across + RIM_M) & (points[:, 2] > low) & (points[:, 2] < high))
+    return points[inside]
 
 
 def confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:

@@ -18,7 +18,7 @@ over and around the object, and the room it leaves, is `skills.arm.headroom`'s.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -47,6 +47,8 @@ HIGH_ABOVE_M = 0.12
 _CARRYING = frozenset({"lift", "out", "carry", "in", "lower"})
 _COMING = frozenset({"high above the object", "above the object", "before the object",
                      "well before the object's side", "before the object's side"})
+#: The stages in which the object is lifted clear of where it stood and of where it goes.
+_LIFTED = frozenset({"out", "carry", "in"})
 #: The grasps of an object's top near its edge and of its side, tried only under a board.
 EDGE, SIDE = "fingertips-on-near-edge", "fingertips-on-near-side"
 #: How much room (m) over an object's top a hand on its near edge needs for its wrist, leaning back
@@ -113,7 +115,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
-    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off) for point in (top, *places)))
+    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _toward(base_pose, point)) for point in (top, *places)))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
     near = np.zeros((0, 3)) if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
@@ -150,7 +152,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         def check(what: str, posture: np.ndarray) -> str | None:
             if what in _COMING:
                 return around.problem(posture, hand=True)
-            return clearance.problem(posture, carried if what in _CARRYING else None)
+            return clearance.problem(posture, carried if what in _CARRYING else None, lifted=what in _LIFTED)
 
         stages = route.stages()
         try:
@@ -316,7 +318,13 @@ class _Route:
             builder.move(f"{'down' if first.startswith('high') else 'in'} to {what}", named[what], careful=True,
                          stop_on_contact=True, tcp_target=target)
         builder.grasp(self.way, self.down, named[self.down], self.grasp, "object")
-        for what in ("lift", "out", "carry", "in"):  # what it carries meeting a door or drawer stops it
+        # The lift begins with the thing on what it stands on, pressed there by the fingertips of a
+        # grasp on its top: that contact, a millimetre deep, stopped a box's lift out of a drawer at
+        # its first sample (recursive 1050 of tuning-wide). Only a contact it did not begin with,
+        # or that one pressed deeper, stops the lift; any contact stops the moves after it.
+        builder.move("lift", named["lift"], careful=True, tcp_target=targets["lift"])
+        builder.steps[-1] = replace(builder.steps[-1], stop_on_new_contact=True)
+        for what in ("out", "carry", "in"):  # what it carries meeting a door or drawer stops it
             if what in named:
                 builder.move(what, named[what], careful=what != "carry", stop_on_contact=True,
                              tcp_target=targets[what])
