@@ -2,8 +2,7 @@
 
 - pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
   the doors and drawers sweep as they open and of the lanes to their handles:
-  `agent.acsg.keep_clear`; out of the lane to where it stood, taken out of storage, or lifted off
-  what it covered where another spot is free), the base slid along a side of the table to where the arm reaches both
+  `agent.acsg.keep_clear`), the base slid along a side of the table to where the arm reaches both
   the object and the spot (`PLACE_REACH_M`), level with the object where it can: along the front,
   where the robot started facing the table, and where that fails, along the other sides that the
   arm reaches the object from, the nearest first (`skills.table_sides`), at a stand where the arm
@@ -24,7 +23,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from agent.acsg.from_memory import Box
-from agent.acsg.decision import COVER_LABELS
 from agent.acsg.interfaces import SkillResult
 from agent.acsg.keep_clear import kept_clear, way_out
 from agent.perception.grasp_poses import drawer_floor, standing_extent, top_grasp_point
@@ -57,14 +55,9 @@ ARM_REACH_M = 0.85
 #: `ARM_REACH_M` fails at planning. The base slides along the table's edge to a stand from which
 #: both lie within this.
 PLACE_REACH_M = 0.8
-#: How high (m) over the surface the lane to a thing taken away stands for `idle_spot`
-#: (`way_out`: out of storage, or a cover whose hidden thing is reached for next along it): above
-#: its top, where the points of things count.
+#: How high (m) over the surface the lane a thing came out of storage along stands for
+#: `idle_spot` (`way_out`): above its top, where the points of things count.
 LANE_ABOVE_M = 0.03
-#: How far (m) to either side of the line from a stand to what a cover hid the arm reaching for it
-#: passes: a forearm came down on the edge of a box put down 3 cm beside that line (recursive 1059 of
-#: tuning-wide).
-REACH_LANE_HALF_WIDTH_M = 0.06
 #: How far apart (m) the stands along a side other than the front are tried (`Picks._clear_stand`).
 STAND_STEP_M = 0.05
 
@@ -109,12 +102,9 @@ class Picks:
         at the table's front, where the robot started; where no spot is free or no plan is found
         from there, at the other sides of the table that the arm reaches the thing from, the
         nearest first, unless the thing is in storage or a part this robot opened stands open
-        (`_sides`). Taken out of storage, it is never put down in the lane from where it stood to
-        the robot; a cover (`agent.acsg.decision.COVER_LABELS`) only where no other spot is free:
-        what it hid is reached for next, over that lane. A thing standing in a drawer the robot
-        opened reaches down to the drawer's floor (`_drawer_floor`). Lifted out of a door or
-        drawer standing open, the wrist camera looks in again at what it covered
-        (`DoorsAndDrawers.look_again_into`).
+        (`_sides`). A thing standing in a drawer the robot opened reaches down to the drawer's
+        floor (`_drawer_floor`). Lifted out of a door or drawer standing open, the wrist camera
+        looks in again at what it covered (`DoorsAndDrawers.look_again_into`).
 
         Args:
             obj: the thing to move out of the way.
@@ -147,19 +137,18 @@ class Picks:
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
         obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
         in_storage = under_a_board(top, extent, keep_off)
-        if in_storage:  # out of storage: never down in its way out
+        if in_storage:  # out of storage: not down in its way out
             obstacles.append(way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M))
         front_only = in_storage or bool(self.parts.standing_open())
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
-        cover = obj.label in COVER_LABELS and not in_storage
-        for side, grasp_along, kept, preferred in self._tries(table, top, front_only, obstacles, radius, cover, table_top):
+        for side, grasp_along in self._sides(table, top, front_only):
             try:
                 stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
-                                                     kept, radius)
+                                                     obstacles, radius)
                 self.parts.drive(stand)
             except SkillPlanError as error:
                 level = table.stand(side, table.along(side, top))
-                first = first if preferred else first or (error, (level.x, level.y))
+                first = first or (error, (level.x, level.y))
                 continue
             places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
             result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
@@ -174,8 +163,8 @@ class Picks:
             if not result.unplanned:  # the arm moved: the scene is no longer as the other sides would plan from
                 first = (result, (stand.x, stand.y))
                 break
-            first = first if preferred else first or (result, (stand.x, stand.y))
-        assert first is not None  # `_sides` gives one side at least, tried without preference last
+            first = first or (result, (stand.x, stand.y))
+        assert first is not None  # `_sides` gives one side at least
         failure, stood = first
         if isinstance(failure, SkillPlanError):  # say so where no side brings the thing within reach
             raise SkillPlanError(f"{failure}{beyond_reach(top, stood)}") from None
@@ -206,37 +195,6 @@ class Picks:
             level = table.along(FRONT, top)
             reaching.insert(0, (False, 0.0, FRONT, (level, level)))
         return [(side, interval) for _, _, side, interval in reaching[:1 if front_only else None]]
-
-    def _tries(self, table: TableSides, top: np.ndarray, front_only: bool, obstacles: list[np.ndarray],
-               radius: float, cover: bool, table_top: float) -> list[tuple[int, tuple[float, float], list[np.ndarray], bool]]:
-        """The picks to try, in turn: each side of `_sides` with the things to put the object down
-        off (``obstacles``, point sets). A ``cover`` is tried first from each side put down out of
-        the lane from the stand level with it to where it stood (as wide as the cover, and
-        `REACH_LANE_HALF_WIDTH_M` either side at least), then from each side anywhere: what it hid
-        is reached for next over that lane, yet the only free places, or the only ones a plan
-        reached, stood in it (recursive 1003, 1064 of tuning-wide). Why a try so preferred failed
-        is not why the pick failed: the tries after it say that.
-
-        Args:
-            table: the table's sides.
-            top: the middle of the object's top.
-            front_only: whether only the front is tried.
-            obstacles: the point sets to keep off.
-            radius: half the object's width (m).
-            cover: whether the object is a cover lifted off what it hid.
-            table_top: the table's height.
-
-        Returns:
-            (side, the span along it the arm reaches the object from, the point sets to keep off,
-            whether the try is a preferred one).
-        """
-        sides = self._sides(table, top, front_only)
-        preferred = []
-        for side, grasp_along in sides if cover else ():
-            level = table.stand(side, table.along(side, top))
-            lane = way_out(top, max(radius, REACH_LANE_HALF_WIDTH_M), np.array(level[:2]), table_top + LANE_ABOVE_M)
-            preferred.append((side, grasp_along, [*obstacles, lane], True))
-        return [*preferred, *((side, grasp_along, obstacles, False) for side, grasp_along in sides)]
 
     def _stand_and_spots(self, obj: Instance, surface: Instance, table: TableSides, side: int,
                          grasp_along: tuple[float, float], top: np.ndarray, extent: np.ndarray,

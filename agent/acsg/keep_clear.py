@@ -93,13 +93,12 @@ def kept_clear(memory: InstanceMemory, eye: np.ndarray, robot_xy: np.ndarray,
 
 
 def way_out(point: np.ndarray, half_width: float, robot_xy: np.ndarray, z: float) -> np.ndarray:
-    """Points of the lane a thing taken out of storage came out along, or a cover lifted off what
-    it hid was taken along, for `idle_spot` to keep the thing off: from ``point`` (where it stood)
-    straight towards the robot at ``robot_xy``, ``half_width`` (m) to either side, at height
-    ``z``. Put down in that lane, in front of the cabinet it came from, a box hid the lower half of
-    the smaller box it had covered from the robot's cameras and stood in the way of the hand
-    reaching in for it (recursive 1075 of tuning-wide); put down in it on the table, a box held
-    up the forearm reaching over it for the box it had covered (recursive 1154).
+    """Points of the lane a thing taken out of storage came out along, for `idle_spot` to keep the
+    thing off: from ``point`` (where it stood) straight towards the robot at ``robot_xy``,
+    ``half_width`` (m) to either side, at height ``z``. Put down in that lane, in front of the
+    cabinet it came from, a box hid the lower half of the smaller box it had covered from the
+    robot's cameras and stood in the way of the hand reaching in for it (recursive 1075 of
+    tuning-wide).
 
     Args:
         point: where the thing stood (world; its x, y count).
