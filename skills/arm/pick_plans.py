@@ -55,6 +55,9 @@ EDGE, SIDE = "fingertips-on-near-edge", "fingertips-on-near-side"
 #: 65° (`skills.arm.grasps.EDGE_PITCHES`), the steepest tried; under a board lower than that over
 #: the lift, the grasps of its side are tried first (`_clear_routes`).
 LEANING_ROOM_M = 0.19
+#: How far over the surface (m) an object's bottom stands where it stands in storage, drawn out
+#: over the front of what it stands in (`skills.arm.headroom.over_the_rim`'s ``out``).
+IN_STORAGE_M = 0.03
 #: How far before the pose above the object (towards the robot, m) the hand may come in from.
 BEFORE_M = (0.15, 0.3, 0.45)
 #: A low lift clears the object's own height by `skills.arm.headroom.LIFT_SPARE_M`, and is never
@@ -115,7 +118,11 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
-    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _toward(base_pose, point)) for point in (top, *places)))
+    # drawn out over a front only where it stands above the surface (in storage), not on the table,
+    # where a higher lift let a route taken unchecked reach over a box just put down (recursive 1059)
+    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _toward(base_pose, point)
+                                        if surface_z is None or point[2] - size[2] > surface_z + IN_STORAGE_M else None)
+                           for point in (top, *places)))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
     near = np.zeros((0, 3)) if keep_off is None else np.asarray(keep_off, dtype=float).reshape(-1, 3)
