@@ -227,11 +227,11 @@ def drawer_floor(points: np.ndarray, drawer: np.ndarray) -> tuple[float, bool] |
         return None
     around = np.all((near[:, :2] >= lo[:2] - FLOOR_AROUND_M) & (near[:, :2] <= hi[:2] + FLOOR_AROUND_M), axis=1)
     below = near[around & (near[:, 2] < lo[2])]
-    levels, counts = np.unique(np.round(below[:, 2], 3), return_counts=True)
+    heights = np.round(below[:, 2], 3)
+    levels, counts = np.unique(heights, return_counts=True)
     # the floor is a layer: of the levels that spread both ways, the one with the most points (a
     # front and a side wall near the object spread both ways too, a line each)
-    spread = [np.all(np.ptp(below[np.round(below[:, 2], 3) == level][:, :2], axis=0) >= FLOOR_SPREAD_M)
-              for level in levels]
+    spread = [np.all(np.ptp(below[heights == level][:, :2], axis=0) >= FLOOR_SPREAD_M) for level in levels]
     if any(spread):
         return float(levels[np.flatnonzero(spread)[np.argmax(counts[spread])]]), True
     return float(near[:, 2].min()), False

@@ -118,10 +118,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
-    # drawn out over a front only where it stands above the surface (in storage), not on the table,
-    # where a higher lift let a route taken unchecked reach over a box just put down (recursive 1059)
-    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _toward(base_pose, point)
-                                        if surface_z is None or point[2] - size[2] > surface_z + IN_STORAGE_M else None)
+    lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _drawn_out(base_pose, point, size, surface_z))
                            for point in (top, *places)))
     here = arm.start_configuration(q)
     ik = IKSearch(arm, here, base_pose)
@@ -237,6 +234,17 @@ def _retraced(ik: IKSearch, stages: list[tuple[str, str, Any]], check: PostureCh
         return None
     chains = [found[-1][-1][None, :], *(found[last - k + 1][::-1] for k in range(1, last + 1))]
     return chains if backs_off else [*chains, chains[-1][::-1]]
+
+
+def _drawn_out(base_pose: Pose2D, point: np.ndarray, size: np.ndarray, surface_z: float | None
+               ) -> np.ndarray | None:
+    """The way an object whose top is at ``point`` is drawn out of storage (`_toward` the base)
+    where it stands `IN_STORAGE_M` or more above the surface; None on the surface, where a lift
+    raised by what stands before it let a route taken unchecked reach over a box just put down
+    (recursive 1059 of tuning-wide)."""
+    if surface_z is not None and point[2] - size[2] <= surface_z + IN_STORAGE_M:
+        return None
+    return _toward(base_pose, point)
 
 
 def _toward(base_pose: Pose2D, point: np.ndarray) -> np.ndarray:
