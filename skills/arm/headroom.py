@@ -86,6 +86,46 @@ def over_the_rim(top: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None,
     return float(around[:, 2].max() - bottom + LIFT_SPARE_M) if len(around) else 0.0
 
 
+def over_the_way(top: np.ndarray, place: np.ndarray, size: np.ndarray, keep_off: np.ndarray | None) -> float:
+    """How high (m) the object, its top at ``top``, must be lifted above its grasp and its release,
+    at ``place``, for its bottom to clear by `LIFT_SPARE_M` what stands between the two, carried
+    straight across: the box put down between where a smaller box waited and where it went back
+    stood 1.4 cm over that box's bottom, carried the usual 15 cm over the table, and no route
+    put the smaller box back (recursive 1217 of tuning-wide). What stands around either end is
+    not counted: the rim a thing is lifted over (`over_the_rim`), what it goes down over.
+
+    Args:
+        top: the middle of the object's top where it stands (world).
+        place: where that point goes (world).
+        size: its box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+
+    Returns:
+        The lift (m); 0 where nothing stands in the way.
+    """
+    if keep_off is None or not len(keep_off):
+        return 0.0
+    points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
+    start, end = np.asarray(top, dtype=float), np.asarray(place, dtype=float)
+    span = end[:2] - start[:2]
+    length = float(np.linalg.norm(span))
+    if length < 1e-6:
+        return 0.0
+    along = span / length
+    side = np.array([-along[1], along[0]])
+    half = np.asarray(size[:2], dtype=float) / 2
+    half_along, half_across = float(half @ np.abs(along)), float(half @ np.abs(side))
+    offsets = points[:, :2] - start[:2]
+    ahead, across = offsets @ along, np.abs(offsets @ side)
+    ends = half + RIM_M
+    in_way = ((ahead >= -half_along) & (ahead <= length + half_along) & (across <= half_across + RIM_M)
+              & np.any(np.abs(offsets) > ends, axis=1) & np.any(np.abs(points[:, :2] - end[:2]) > ends, axis=1))
+    if not np.any(in_way):
+        return 0.0
+    level = start[2] + np.clip(ahead[in_way] / length, 0.0, 1.0) * (end[2] - start[2])  # the carried top's
+    return max(0.0, float(np.max(points[in_way, 2] + LIFT_SPARE_M + size[2] - level)))
+
+
 def _ahead(keep_off: np.ndarray | None, top: np.ndarray, size: np.ndarray, out: np.ndarray, low: float,
            high: float) -> np.ndarray:
     """The points of ``keep_off`` between the heights ``low`` and ``high`` in the strip `RIM_OUT_M`

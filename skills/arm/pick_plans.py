@@ -29,7 +29,7 @@ from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import APPROACH_M, searched
 from skills.arm.grasps import UP, ObjectGrasp, hand_touches, local_pose, object_grasps, side_grasps
-from skills.arm.headroom import LIFT_M, LIFT_SPARE_M, confined, headroom, over_the_rim, under_a_board
+from skills.arm.headroom import LIFT_M, LIFT_SPARE_M, confined, headroom, over_the_rim, over_the_way, under_a_board
 from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
@@ -68,6 +68,9 @@ LOW_LIFT_M = 0.05
 CLEAR_GRASPS, CLEAR_ROUTES = 4, 48
 #: How far (m) a carry in the open goes round by the robot's side when straight across is not clear.
 DETOUR_M = 0.25
+#: The highest (m) a carry in the open is raised to pass over what stands in its way
+#: (`skills.arm.headroom.over_the_way`); what stands higher is gone round (`DETOUR_M`).
+HIGHEST_LIFT_M = 0.3
 
 
 def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Sequence[float],
@@ -138,7 +141,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         ways_to = [_ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
         return ways_to, [(route, True) for place, ways in zip(places, ways_to, strict=True)
                          for route in _clear_routes(ways, lift_m, size, keep_off, toward, _toward(base_pose, place),
-                                                    room)]
+                                                    room, over_the_way(top, place, size, keep_off))]
 
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
@@ -350,12 +353,14 @@ class _Route:
 
 
 def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
-                  toward: np.ndarray, to_place: np.ndarray, room: float = np.inf) -> list[_Route]:
+                  toward: np.ndarray, to_place: np.ndarray, room: float = np.inf, over: float = 0.0
+                  ) -> list[_Route]:
     """The routes to seek a chain clear all the way on, likeliest first, `CLEAR_ROUTES` at most.
 
-    In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m`, from high above, directly or from
-    before the pose above; carried straight across, or, after every straight route, round by the
-    robot's side (`_detours`).
+    In the open, the best `CLEAR_GRASPS` grasps, lifted `lift_m` and then, where what stands in
+    the way across needs it (``over``, up to `HIGHEST_LIFT_M`), higher, from high above, directly
+    or from before the pose above; carried straight across, or, after every straight route, round
+    by the robot's side (`_detours`).
     Where a board stands close over the object or its place (`skills.arm.headroom.confined`: a
     box inside a cabinet) a hand straight down has no room for its wrist: the top's near edge is
     grasped, the hand leaning back towards the robot, the steepest first, or the side that faces
@@ -378,7 +383,7 @@ def _clear_routes(ways: list[_Way], lift_m: float, size: np.ndarray, keep_off: n
         if way.name in (EDGE, SIDE) and not (here or there):
             continue
         out_along, in_along = (-way.rotation[:, 2], -way.rotation[:, 2]) if way.name == SIDE else (toward, to_place)
-        for lift in _lifts(lift_m, size)[::-1] if here or there else [lift_m]:
+        for lift in _lifts(lift_m, size)[::-1] if here or there else _open_lifts(lift_m, over):
             if way.name == SIDE:
                 approaches = _side_approaches(grasp)
             else:
@@ -426,6 +431,12 @@ def _lifts(lift_m: float, size: np.ndarray) -> list[float]:
     clears what it covers (its own height: a box over a smaller one), for a board close above it."""
     low = max(float(size[2]) + LIFT_SPARE_M, LOW_LIFT_M)
     return [lift_m] if low >= lift_m else [lift_m, low]
+
+
+def _open_lifts(lift_m: float, over: float) -> list[float]:
+    """How high above its place an object carried in the open may be lifted: the usual first, then
+    ``over`` what stands in the way across where that is higher, and not above `HIGHEST_LIFT_M`."""
+    return [lift_m, over] if lift_m < over <= HIGHEST_LIFT_M else [lift_m]
 
 
 def _approaches(above: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarray, before: bool
