@@ -90,6 +90,9 @@ def test_split_options_that_conflict_are_named(split, variants, seed_base, recor
     ("pick_away: plan: pick: no route clear of what stands near, and none is taken unchecked under a board "
      "close over the object or its place" + beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)),
      "beyond the arm's reach"),
+    ("pick_away: plan: pick: no room to lift it: what stands over it is 0.062 m over its top, and it is lifted "
+     "0.156 m at the least, clear of its own height (of what it may cover)"
+     + beyond_reach(np.array([0.1, 0.25, 0.9]), (0.1, -0.72)), "no room to lift it in storage"),
     ("pick: no route clear of what stands near, and every route taken unchecked that reaches would carry it "
      "through what stands near", "carry would meet what stands near"),
     ("the base could not reach (0.12, -0.80, 90°): it touched door", "base unreachable"),

@@ -366,13 +366,18 @@ def test_a_pick_comes_down_on_the_top_carries_at_height_and_lets_go_above_the_pl
 def test_a_pick_under_a_board_with_no_clear_route_is_refused_rather_than_run_unchecked(planner: ArmPlanner) -> None:
     # A box 12 cm tall inside a cabinet, a board 12 cm over its top: lifted clear of what it covers,
     # it would meet the board, whatever holds it; an unchecked route there wrecked the storage (a
-    # box lifted out of an open drawer pushed the chest's drawers in past their end stops). The
-    # same box in the open is picked.
+    # box lifted out of an open drawer pushed the chest's drawers in past their end stops). Refused
+    # as that, before any route is sought; a board 14 cm over it leaves the lift room, but no
+    # route. The same box in the open is picked.
     top, place = np.array([0.25, -0.15, 0.87]), np.array([0.45, -0.2, 0.87])
     xs, ys = np.meshgrid(np.linspace(0.1, 0.4, 16), np.linspace(-0.3, 0.0, 16))
     board = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, top[2] + 0.12)])
-    with pytest.raises(SkillPlanError, match="none is taken unchecked under a board"):
+    with pytest.raises(SkillPlanError, match=r"no room to lift it: what stands over it is 0\.120 m over its top, "
+                                             r"and it is lifted 0\.135 m at the least"):
         planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), place, surface_z=SURFACE, keep_off=board)
+    with pytest.raises(SkillPlanError, match="none is taken unchecked under a board"):
+        planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), place, surface_z=SURFACE,
+                          keep_off=board + [0.0, 0.0, 0.02])
     plan = planner.plan_pick(np.array(STOWED), BASE, top, (0.05, 0.07, 0.12), place, surface_z=SURFACE,
                              keep_off=board + np.array([0.0, 0.0, 1.0]))
     _check_runnable(plan, np.array(STOWED))

@@ -29,7 +29,8 @@ from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform, pose_at, shifted
 from skills.arm.grasp_lines import APPROACH_M, searched
 from skills.arm.grasps import UP, ObjectGrasp, hand_touches, local_pose, object_grasps, side_grasps
-from skills.arm.headroom import LIFT_M, LIFT_SPARE_M, confined, headroom, over_the_rim, over_the_way, under_a_board
+from skills.arm.headroom import (LIFT_M, LIFT_SPARE_M, confined, headroom, over_the_rim, over_the_way, too_low_to_lift,
+                                 under_a_board)
 from skills.arm.ik_search import IKSearch, PostureCheck
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
@@ -121,6 +122,10 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     if np.any(size <= 0):
         raise SkillPlanError(f"pick: extent {np.round(size, 3).tolist()} must be positive")
     depth = grasp_depth_m if grasp_depth_m is not None else min(0.025, max(0.005, size[2] / 2 - 0.005))
+    if too_low_to_lift(top, size, keep_off, least := _lifts(lift_m, size)[-1]):
+        raise SkillPlanError(f"pick: no room to lift it: what stands over it is "
+                             f"{headroom(top, size, keep_off, least):.3f} m over its top, and it is lifted "
+                             f"{least:.3f} m at the least, clear of its own height (of what it may cover)")
     lift_m = max(lift_m, *(over_the_rim(point, size, keep_off, _drawn_out(base_pose, point, size, surface_z))
                            for point in (top, *places)))
     here = arm.start_configuration(q)

@@ -18,6 +18,7 @@ from typing import Any
 #: (cause, words any of which in a failed action's reason puts it there), tried in order: the
 #: first that matches wins, so the narrower wording comes before the wider.
 ACTION_CAUSES = (
+    ("no room to lift it in storage", ("no room to lift it",)),
     ("beyond the arm's reach", ("beyond the arm's reach",)),
     ("light touch", ("too light for the world to report",)),
     ("held back against a contact", ("held back against",)),
