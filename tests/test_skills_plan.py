@@ -21,7 +21,7 @@ from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF
 from skills.arm.ik_search import IKSearch
 from skills.arm.link_shells import LINK_RADIUS_M
 from skills.arm.part_plans import PUSH_PAST
-from skills.arm.pick_plans import HIGH_ABOVE_M
+from skills.arm.pick_routes import HIGH_ABOVE_M
 from skills.arm.plan_builder import ESCAPE_RAD, PlanBuilder
 from skills.arm.planner import ArmPlanner
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, Step
