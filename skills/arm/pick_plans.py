@@ -1,18 +1,19 @@
 """Plans for picking an object away and back: top-down, or, under a board, by its side.
 
-Above the object (in from higher up, straight down: `skills.arm.pick_routes.HIGH_ABOVE_M`), down onto its top (the
-fingers closing across the line of sight from the robot where the object fits that way, since
-perception places things worst along it, unless the hand would touch less of what stands near
-coming down another way; an object wider than the opening is held by the closed fingertips
-brought down onto its top until they touch, `skills.arm.grasps.object_grasps`), close, lift,
-carry at height, lower until the object stands a little above where it should, or until it meets
-what it is put on first (a top a little higher than the memory had it holds the arm back without
-the arm touching anything: the world puts a released object down onto whatever is under it),
-open, back up, ready. Under a board close over it (a box in a cabinet), the hand takes its top's
-near edge leaning back towards the robot, or, where the board leaves too little room for that
+Above the object (in from higher up, straight down: `skills.arm.pick_routes.HIGH_ABOVE_M`), down
+onto its top (the fingers closing across the line of sight from the robot where the object fits
+that way, since perception places things worst along it, unless the hand would touch less of what
+stands near coming down another way; an object wider than the opening is held by the closed
+fingertips brought down onto its top until they touch, `skills.arm.grasps.object_grasps`), close,
+lift, carry at height, lower until the object stands a little above where it should, or until it
+meets what it is put on first (a top a little higher than the memory had it holds the arm back
+without the arm touching anything: the world puts a released object down onto whatever is under
+it), open, back up, ready. Under a board close over it (a box in a cabinet), the hand takes its
+top's near edge leaning back towards the robot, or, where the board leaves too little room for that
 wrist, the side facing the robot, the hand level (`skills.arm.grasps.side_grasps`); the object is
 drawn straight out of the storage, and the hand backs off it level after letting go. What stands
-over and around the object, and the room it leaves, is `skills.arm.headroom`'s.
+over and around the object, and the room it leaves, is `skills.arm.headroom`'s; the routes a chain
+of postures is sought along, `skills.arm.pick_routes`'.
 """
 
 from __future__ import annotations
@@ -86,7 +87,8 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
         rest on its top (``info["grasp_way"]``: the grasp itself), ``info["place_point"]`` where it goes.
 
     Raises:
-        SkillPlanError: a bad argument, or no grasp reaches along the whole chain.
+        SkillPlanError: a bad argument, no room over the object to lift it off what it may cover
+            (`skills.arm.headroom.too_low_to_lift`), or no grasp reaches along the whole chain.
     """
     top = checked_vector(object_point, "object_point")
     places = np.asarray(place_point, dtype=float)
