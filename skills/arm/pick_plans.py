@@ -28,11 +28,10 @@ from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import searched
-from skills.arm.grasps import OPEN_EDGE_INSET_M, UP, ObjectGrasp, object_grasps, side_grasps
+from skills.arm.grasps import UP, ObjectGrasp, object_grasps, side_grasps
 from skills.arm.headroom import LIFT_M, headroom, over_the_rim, over_the_way, too_low_to_lift
 from skills.arm.ik_search import IKSearch, PostureCheck
-from skills.arm.pick_routes import (LEANING_ROOM_M, Route, Way, clear_routes, edge_routes_in_the_open, lifts,
-                                    plain_routes, ways)
+from skills.arm.pick_routes import LEANING_ROOM_M, Route, Way, clear_routes, lifts, plain_routes, ways
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
 
@@ -133,13 +132,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     first = [] if grasp_first is None else [(route, clear) for route, clear in sought([grasp_first])[1]
                                              if grasp_first.touch or np.any(route.inward) or np.any(route.out)]
     ways_to, routes = sought(grasps)
-    # Last, where nothing else reaches: the near edge of a top beyond the hand's reach from above.
-    open_edges = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth,
-                               edge_inset_m=OPEN_EDGE_INSET_M)
-    last = [(route, True) for place in places for route in edge_routes_in_the_open(
-        ways(open_edges, top, place, size, lift_m, clearance_m, keep_off), lift_m, size, keep_off, toward,
-        _toward(base_pose, place), over_the_way(top, place, size, keep_off))]
-    routes = [*first, *routes, *((route, False) for route in plain_routes(ways_to[0], lift_m, keep_off)), *last]
+    routes = [*first, *routes, *((route, False) for route in plain_routes(ways_to[0], lift_m, keep_off))]
     carried_into = False
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release
