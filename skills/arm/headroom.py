@@ -131,13 +131,9 @@ def over_the_way(top: np.ndarray, place: np.ndarray, size: np.ndarray, keep_off:
     length = float(np.linalg.norm(span))
     if length < 1e-6:
         return 0.0
-    along = span / length
-    side = np.array([-along[1], along[0]])
-    half = np.asarray(size[:2], dtype=float) / 2
-    half_along, half_across = float(half @ np.abs(along)), float(half @ np.abs(side))
+    ahead, across, half_along, half_across = _strip(points, start, size, span / length)
     offsets = points[:, :2] - start[:2]
-    ahead, across = offsets @ along, np.abs(offsets @ side)
-    ends = half + RIM_M
+    ends = np.asarray(size[:2], dtype=float) / 2 + RIM_M
     in_way = ((ahead >= -half_along) & (ahead <= length + half_along) & (across <= half_across + RIM_M)
               & np.any(np.abs(offsets) > ends, axis=1) & np.any(np.abs(points[:, :2] - end[:2]) > ends, axis=1))
     if not np.any(in_way):
@@ -154,15 +150,21 @@ def _ahead(keep_off: np.ndarray | None, top: np.ndarray, size: np.ndarray, out: 
     if keep_off is None or not len(keep_off):
         return np.zeros((0, 3))
     points = np.asarray(keep_off, dtype=float).reshape(-1, 3)
-    along = np.asarray(out, dtype=float)[:2]
-    side = np.array([-along[1], along[0]])
-    half_along = float(np.abs(size[:2] / 2) @ np.abs(along))
-    half_across = float(np.abs(size[:2] / 2) @ np.abs(side))
-    offsets = points[:, :2] - np.asarray(top, dtype=float)[:2]
-    ahead, across = offsets @ along, np.abs(offsets @ side)
+    ahead, across, half_along, half_across = _strip(points, top, size, np.asarray(out, dtype=float)[:2])
     inside = ((ahead > half_along + RIM_M) & (ahead <= half_along + RIM_M + RIM_OUT_M)
               & (across <= half_across + RIM_M) & (points[:, 2] > low) & (points[:, 2] < high))
     return points[inside]
+
+
+def _strip(points: np.ndarray, top: np.ndarray, size: np.ndarray, along: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Where ``points`` stand from the object's middle along the level unit vector ``along`` (signed)
+    and across it (unsigned), and the object's half extents along and across it: the frame of a
+    strip the object is drawn out or carried along (`_ahead`, `over_the_way`)."""
+    side = np.array([-along[1], along[0]])
+    half = np.abs(np.asarray(size[:2], dtype=float)) / 2
+    offsets = points[:, :2] - np.asarray(top, dtype=float)[:2]
+    return offsets @ along, np.abs(offsets @ side), float(half @ np.abs(along)), float(half @ np.abs(side))
 
 
 def confined(pose: np.ndarray, keep_off: np.ndarray | None) -> bool:

@@ -118,12 +118,13 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
     grasps = [*object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth),
               *side_grasps(size, top, base_pose)]
     room = min(headroom(point, size, keep_off, lift_m + LEANING_ROOM_M) for point in (top, *places))
+    overs = [over_the_way(top, place, size, keep_off) for place in places]
 
     def sought(choices: list[ObjectGrasp]) -> tuple[list[list[Way]], list[tuple[Route, bool]]]:
         ways_to = [ways(choices, top, place, size, lift_m, clearance_m, keep_off) for place in places]
-        return ways_to, [(route, True) for place, there in zip(places, ways_to, strict=True)
+        return ways_to, [(route, True) for place, there, over in zip(places, ways_to, overs, strict=True)
                          for route in clear_routes(there, lift_m, size, keep_off, toward, _toward(base_pose, place),
-                                                   room, over_the_way(top, place, size, keep_off))]
+                                                   room, over)]
 
     # A chain clear of everything all the way, to each place in turn (a few dozen routes at most
     # each, the likeliest first), by ``grasp_first`` before any other; else, as without such
