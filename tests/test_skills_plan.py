@@ -865,3 +865,23 @@ def test_a_way_round_from_the_stowed_pose_is_checked_from_the_ready_pose_on(plan
     assert np.abs(step.samples[-1] - goal).max() < 1e-6
     ready_on = step.samples[int(np.argmin(np.abs(step.samples - planner.ready).max(axis=1))):]
     assert clearance.path_problem(ready_on, hand=True) is None
+
+
+def test_a_box_lifted_out_from_under_a_board_goes_back_in_as_it_came_out(planner: ArmPlanner) -> None:
+    # A box 10 cm tall in a cabinet, its board 12.6 cm over the box's top: lifted only as high as
+    # clears its own height, it comes out 1 mm under the board with the arm's margin. Lowered back
+    # from that much over its release, let go 1.5 cm over its place, it came 1.5 cm higher, into
+    # the board, and no route put it back (recursive 1173 of tuning-wide). Carried as high over
+    # its place as over where it stood, it goes back in.
+    top, place, size = np.array([0.3, -0.15, 0.87]), np.array([0.55, -0.3, 0.855]), np.array([0.2, 0.2, 0.1])
+    xs, ys = np.meshgrid(np.linspace(0.1, 0.5, 21), np.linspace(-0.35, 0.05, 21))
+    board = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, top[2] + 0.126)])
+    away = planner.plan_pick(np.array(STOWED), BASE, top, size, place, surface_z=SURFACE, keep_off=board)
+    assert away.info["clear"] and away.info["lift_m"] < 0.126
+    back = planner.plan_pick(away.final_q, BASE, away.info["place_point"], size, top, surface_z=SURFACE,
+                             keep_off=board, grasp_first=away.info["grasp_way"], skill="pick_back")
+    _check_runnable(back, away.final_q)
+    lowered = {step.name: step for step in back.steps}["lower"]
+    start = base_transform(BASE) @ planner.kin.forward(lowered.samples[0])
+    release = back.info["release_pose"]
+    assert start[2, 3] - release[2, 3] == pytest.approx(back.info["lift_m"] - 0.015, abs=0.002)

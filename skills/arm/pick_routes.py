@@ -47,13 +47,15 @@ HIGHEST_LIFT_M = 0.3
 @dataclass(frozen=True)
 class Way:
     """One grasp of the object to one place: the grasp, the TCP at the grasp and at the release,
-    and whether a board stands close over either, lifted `lift_m` (`skills.arm.headroom.confined`)."""
+    whether a board stands close over either, lifted `lift_m` (`skills.arm.headroom.confined`), and
+    how far above its place the object is let go (``rise``, m)."""
 
     grasp_way: ObjectGrasp
     grasp: np.ndarray
     release: np.ndarray
     confined_here: bool
     confined_there: bool
+    rise: float
 
 
 def ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: np.ndarray, lift_m: float,
@@ -80,7 +82,7 @@ def ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: np
         release = pose_at(way.rotation, place + way.offset + (clearance_m - way.depth) * UP)
         here, there = (board or confined(shifted(pose, lift_m * UP), keep_off)
                        for board, pose in zip(boarded, (grasp, release), strict=True))
-        found.append((_touched(grasp, release, lift_m, keep_off), Way(way, grasp, release, here, there)))
+        found.append((_touched(grasp, release, lift_m, keep_off), Way(way, grasp, release, here, there, clearance_m)))
     return [entry for _, entry in sorted(found, key=lambda pair: pair[0])]
 
 
@@ -88,9 +90,10 @@ def ways(grasps: list[ObjectGrasp], top: np.ndarray, place: np.ndarray, size: np
 class Route:
     """One way to pick: the grasp (``way``, the TCP at ``grasp`` and at ``release``), how high the
     object is lifted, how the hand comes to the pose above it (``approach``: its first stage
-    free), and by how much (world offsets; zero for none) the object is drawn out towards the robot
+    free), by how much (world offsets; zero for none) the object is drawn out towards the robot
     after the lift (``out``) and brought in from before its place (``inward``): out of the
-    cabinet it stood in, into the one it goes back to."""
+    cabinet it stood in, into the one it goes back to; and how far above its place it is let go
+    (``rise``, `Way.rise`)."""
 
     way: ObjectGrasp
     grasp: np.ndarray
@@ -99,6 +102,7 @@ class Route:
     approach: tuple[tuple[str, str, Any], ...]
     out: np.ndarray
     inward: np.ndarray
+    rise: float
 
     @property
     def backs_off(self) -> bool:
@@ -116,12 +120,17 @@ class Route:
         return "back off" if self.backs_off else "back up"
 
     def stages(self) -> list[tuple[str, str, Any]]:
-        """The chain's stages: the approach, down, lift, out, carry, in, lower, back up.
+        """The chain's stages: the approach, down, lift, out, carry, in, lower, back up. The object
+        is carried ``lift`` above where it stood and above its place, not above the release
+        (``rise`` higher): lowered from that much higher into the cabinet it was lifted out of, a
+        box 10 cm tall under a board 12.6 cm over it came 3 mm short of the board with the arm's
+        margin, and no route put it back (recursive 1173 of tuning-wide).
 
         Returns:
             (what, "free" or "line", the TCP's world target) of each, in order.
         """
-        above_grasp, above_release = shifted(self.grasp, self.lift * UP), shifted(self.release, self.lift * UP)
+        above_grasp = shifted(self.grasp, self.lift * UP)
+        above_release = shifted(self.release, (self.lift - self.rise) * UP)
         stages = [*self.approach, (self.down, "line", self.grasp), ("lift", "line", above_grasp)]
         if np.any(self.out):
             stages.append(("out", "line", shifted(above_grasp, self.out)))
@@ -216,7 +225,7 @@ def clear_routes(choices: list[Way], lift_m: float, size: np.ndarray, keep_off: 
             for approach in approaches:
                 for out, inward in _detours(here, there):
                     routes.append(Route(way, grasp, release, lift, tuple(approach), out * out_along,
-                                        inward * in_along))
+                                        inward * in_along, entry.rise))
 
     def in_storage(route: Route) -> bool:  # open routes first, stable: else in the order built
         return bool(np.any(route.out) or np.any(route.inward) or route.way.name in (EDGE, SIDE))
@@ -257,7 +266,8 @@ def plain_routes(choices: list[Way], lift_m: float, keep_off: np.ndarray | None)
             continue
         above = shifted(entry.grasp, lift_m * UP)
         for approach in _approaches(above, keep_off, none, before=False):
-            routes.append(Route(entry.grasp_way, entry.grasp, entry.release, lift_m, tuple(approach), none, none))
+            routes.append(Route(entry.grasp_way, entry.grasp, entry.release, lift_m, tuple(approach), none, none,
+                                entry.rise))
     return routes
 
 
