@@ -2,7 +2,8 @@
 
 - pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
   the doors and drawers sweep as they open and of the lanes to their handles:
-  `agent.acsg.keep_clear`), the base slid along a side of the table to where the arm reaches both
+  `agent.acsg.keep_clear`, and out of the lane from where it stood to the robot, along which what
+  it hid is reached for next, where that leaves a place or it came out of storage), the base slid along a side of the table to where the arm reaches both
   the object and the spot (`PLACE_REACH_M`), level with the object where it can: along the front,
   where the robot started facing the table, and where that fails, along the other sides that the
   arm reaches the object from, the nearest first (`skills.table_sides`), at a stand where the arm
@@ -55,7 +56,7 @@ ARM_REACH_M = 0.85
 #: `ARM_REACH_M` fails at planning. The base slides along the table's edge to a stand from which
 #: both lie within this.
 PLACE_REACH_M = 0.8
-#: How high (m) over the surface the lane a thing came out of storage along stands for
+#: How high (m) over the surface the lane from where a thing stood to the robot stands for
 #: `idle_spot` (`way_out`): above its top, where the points of things count.
 LANE_ABOVE_M = 0.03
 #: How far apart (m) the stands along a side other than the front are tried (`Picks._clear_stand`).
@@ -133,18 +134,15 @@ class Picks:
         extent = standing_extent(points, np.vstack([keep_off, surface.points()]), floor_z=max(table_top, floor),
                                  stands_on_z=floor if seen else None)
         box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
-        others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
-        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
-        obstacles, radius = [*others, *clear], float(max(extent[:2])) / 2
+        radius = float(max(extent[:2])) / 2
         in_storage = under_a_board(top, extent, keep_off)
-        if in_storage:  # out of storage: not down in its way out
-            obstacles.append(way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M))
+        keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage)
         front_only = in_storage or bool(self.parts.standing_open())
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
         for side, grasp_along in self._sides(table, top, front_only):
             try:
                 stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
-                                                     obstacles, radius)
+                                                     keep_clear_of, radius)
                 self.parts.drive(stand)
             except SkillPlanError as error:
                 level = table.stand(side, table.along(side, top))
@@ -169,6 +167,28 @@ class Picks:
         if isinstance(failure, SkillPlanError):  # say so where no side brings the thing within reach
             raise SkillPlanError(f"{failure}{beyond_reach(top, stood)}") from None
         return SkillResult(False, failure.reason + (beyond_reach(top, stood) if failure.unplanned else ""))
+
+    def _keep_clear_of(self, surface: Instance, top: np.ndarray, radius: float, table_top: float,
+                       in_storage: bool) -> list[list[np.ndarray]]:
+        """The point sets a spot to put a thing down on keeps clear of, in the order they are tried:
+        every remembered thing but ``surface``, what the doors and drawers sweep and the lanes to
+        their handles (`kept_clear`), and the lane from where the thing stood (``top``, its top
+        grasp point; ``radius``, its footprint's) to the robot (`way_out`); then, for a thing in
+        the open, the same but that lane. A thing is picked away for what it hides, and that is
+        reached for next along the lane: a box lifted off a smaller one and put down right before
+        it held back the hand leaning over it to the smaller one's near edge, which closed on
+        nothing above its top (recursive 1154 and 1160 of tuning-wide); out of storage, it hid the
+        smaller box's lower half from the cameras (recursive 1075), and there the lane is kept.
+
+        Returns:
+            One or two lists of (N, 3) point sets.
+        """
+        body = self.body
+        assert body.home is not None
+        others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
+        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
+        lane = way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M)
+        return [[*others, *clear, lane]] if in_storage else [[*others, *clear, lane], [*others, *clear]]
 
     def _sides(self, table: TableSides, top: np.ndarray, front_only: bool = False
                ) -> list[tuple[int, tuple[float, float]]]:
@@ -198,7 +218,7 @@ class Picks:
 
     def _stand_and_spots(self, obj: Instance, surface: Instance, table: TableSides, side: int,
                          grasp_along: tuple[float, float], top: np.ndarray, extent: np.ndarray,
-                         obstacles: list[np.ndarray], radius: float) -> tuple[Pose2D, np.ndarray]:
+                         keep_clear_of: list[list[np.ndarray]], radius: float) -> tuple[Pose2D, np.ndarray]:
         """Where on ``side``'s line the base stands to pick ``obj`` (its arm reaching the object from
         anywhere in ``grasp_along``) and the spots to put it down that the arm reaches from there,
         nearest first (`_put_down_spots`): sought first towards the robot from the object (towards
@@ -224,7 +244,7 @@ class Picks:
             ahead = table.local(FRONT, places[:, :2])[:, 1] - table.line(FRONT)
             return reachable(places) & (ahead >= body.head_sees_from)
 
-        spots = self._put_down_spots(obj, surface, obstacles, radius, near, extent, beyond_strip, reachable)
+        spots = self._put_down_spots(obj, surface, keep_clear_of, radius, near, extent, beyond_strip, reachable)
         (place_lo,), (place_hi,) = reach_along(table.local(side, spots[:1, :2]), line, PLACE_REACH_M)
         lo_along, hi_along = max(grasp_lo, place_lo), min(grasp_hi, place_hi)
         along = float(np.clip(table.along(side, top), lo_along, hi_along))
@@ -249,34 +269,37 @@ class Picks:
         raise SkillPlanError(f"no stand at the table's {SIDE_NAMES[side]} from which the arm comes out of the base "
                              "clear of what stands there")
 
-    def _put_down_spots(self, obj: Instance, surface: Instance, obstacles: list[np.ndarray], radius: float,
-                        near: np.ndarray, extent: np.ndarray, beyond_strip: Callable[[np.ndarray], np.ndarray],
+    def _put_down_spots(self, obj: Instance, surface: Instance, keep_clear_of: list[list[np.ndarray]],
+                        radius: float, near: np.ndarray, extent: np.ndarray,
+                        beyond_strip: Callable[[np.ndarray], np.ndarray],
                         reachable: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
         """Where ``obj`` (of ``extent``, ``radius`` across its footprint) may be put down, nearest
-        ``near`` first: free places of ``surface`` clear of ``obstacles`` beyond the strip the arm
-        works over from the robot's stands (``beyond_strip``), else in it (``reachable``), else on
-        top of a thing put away before it (`_on_a_thing_away`).
+        ``near`` first: free places of ``surface`` clear of the first point sets of
+        ``keep_clear_of`` (`_keep_clear_of`) beyond the strip the arm works over from the robot's
+        stands (``beyond_strip``), else in it (``reachable``); else clear of the next sets, the
+        same way; else on top of a thing put away before it (`_on_a_thing_away`).
 
         Returns:
             (k, 3): the spots (x, y, top z).
 
         Raises:
-            SkillPlanError: no place is free (the reason the surface gives).
+            SkillPlanError: no place is free (the reason the surface gives, clear of the last sets).
         """
         options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
-        try:
-            return idle_spot(surface.points(), obstacles, radius, near, allowed=beyond_strip,
-                             allowed_means="within the arm's reach beyond the strip before the robot", **options)
-        except SkillPlanError:
-            pass
-        try:
-            return idle_spot(surface.points(), obstacles, radius, near, allowed=reachable,
-                             allowed_means="within the arm's reach", **options)
-        except SkillPlanError as no_room:
-            spots = self._on_a_thing_away(obj, extent, reachable)
-            if spots is None:
-                raise no_room from None
-            return spots
+        no_room: SkillPlanError | None = None
+        for obstacles in keep_clear_of:
+            for allowed, means in ((beyond_strip, "within the arm's reach beyond the strip before the robot"),
+                                   (reachable, "within the arm's reach")):
+                try:
+                    return idle_spot(surface.points(), obstacles, radius, near, allowed=allowed, allowed_means=means,
+                                     **options)
+                except SkillPlanError as error:
+                    no_room = error
+        spots = self._on_a_thing_away(obj, extent, reachable)
+        if spots is None:
+            assert no_room is not None  # one list of sets at least
+            raise no_room
+        return spots
 
     def _on_a_thing_away(self, obj: Instance, extent: np.ndarray, reachable: Callable[[np.ndarray], np.ndarray]
                          ) -> np.ndarray | None:
