@@ -2,13 +2,14 @@
 
 - pick away: a free spot on the surface it stands on (`idle_spot`, towards the robot, out of what
   the doors and drawers sweep as they open and of the lanes to their handles:
-  `agent.acsg.keep_clear`, and out of the lane from where it stood to the robot, along which what
-  it hid is reached for next, where that leaves a place or it came out of storage), the base slid along a side of the table to where the arm reaches both
-  the object and the spot (`PLACE_REACH_M`), level with the object where it can: along the front,
-  where the robot started facing the table, and where that fails, along the other sides that the
-  arm reaches the object from, the nearest first (`skills.table_sides`), at a stand where the arm
-  comes out of the base clear of what stands there; where no place on it is free, on top of a
-  thing put out of the way before it (`stack_spot`);
+  `agent.acsg.keep_clear`; a thing out of storage or one that may cover another, out of the lane
+  from where it stood to the robot, along which what it hid is reached for next), the base slid
+  along a side of the table to where the arm reaches both the object and the spot
+  (`PLACE_REACH_M`), level with the object where it can: along the front, where the robot started
+  facing the table, and where that fails, along the other sides that the arm reaches the object
+  from, the nearest first (`skills.table_sides`), at a stand where the arm comes out of the base
+  clear of what stands there; where no place on it is free, on top of a thing put out of the way
+  before it (`stack_spot`);
 - pick back: from the stand it was picked from, from where it was put down to where it was.
 
 The box a thing filled before it was picked away is kept while it is away (``vacated``): what is
@@ -23,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from agent.acsg.decision import COVER_LABELS
 from agent.acsg.from_memory import Box
 from agent.acsg.interfaces import SkillResult
 from agent.acsg.keep_clear import kept_clear, way_out
@@ -98,8 +100,11 @@ class Picks:
 
     def pick_away(self, obj: Instance) -> SkillResult:
         """Put ``obj`` down on a free spot of the surface it stands on, in the arm's reach and, where
-        there is one, beyond the strip before the robot that the arm works over; where none is
-        free, on top of a thing it put out of the way before (`_on_a_thing_away`). The base stands
+        there is one, beyond the strip before the robot that the arm works over, and, for a thing
+        that may cover another or one out of storage, out of the lane from where it stood to the
+        robot (in the open, where no such spot is free or no plan is found to one, in it:
+        `_keep_clear_of`); where none is free, on top of a thing it put out of the way before
+        (`_on_a_thing_away`). The base stands
         at the table's front, where the robot started; where no spot is free or no plan is found
         from there, at the other sides of the table that the arm reaches the thing from, the
         nearest first, unless the thing is in storage or a part this robot opened stands open
@@ -136,32 +141,38 @@ class Picks:
         box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
         radius = float(max(extent[:2])) / 2
         in_storage = under_a_board(top, extent, keep_off)
-        keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage)
+        keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage, obj.label in COVER_LABELS)
         front_only = in_storage or bool(self.parts.standing_open())
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
         for side, grasp_along in self._sides(table, top, front_only):
-            try:
-                stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
-                                                     keep_clear_of, radius)
-                self.parts.drive(stand)
-            except SkillPlanError as error:
-                level = table.stand(side, table.along(side, top))
-                first = first or (error, (level.x, level.y))
-                continue
-            places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
-            result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                              surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
-            if result.ok:
-                place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
-                body.memory.move(obj.id, _translation(place - top), carried=True)
-                self.away[obj.id] = Away(top, place, obj.bounds, extent, stand, result.info.get("grasp_way"))
-                self.vacated[obj.id] = box
-                self.parts.look_again_into(box)
-                return SkillResult(True)
-            if not result.unplanned:  # the arm moved: the scene is no longer as the other sides would plan from
-                first = (result, (stand.x, stand.y))
+            failed: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # of the last spots sought
+            for tier, keep_clear in enumerate(keep_clear_of):
+                try:
+                    stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
+                                                         keep_clear, radius, may_stack=tier == len(keep_clear_of) - 1)
+                    self.parts.drive(stand)
+                except SkillPlanError as error:
+                    level = table.stand(side, table.along(side, top))
+                    failed = (error, (level.x, level.y))
+                    continue
+                places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
+                result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
+                                  surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
+                if result.ok:
+                    place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
+                    body.memory.move(obj.id, _translation(place - top), carried=True)
+                    self.away[obj.id] = Away(top, place, obj.bounds, extent, stand, result.info.get("grasp_way"))
+                    self.vacated[obj.id] = box
+                    self.parts.look_again_into(box)
+                    return SkillResult(True)
+                failed = (result, (stand.x, stand.y))
+                if not result.unplanned:
+                    break
+            assert failed is not None  # one list of sets at least
+            if isinstance(failed[0], ArmResult) and not failed[0].unplanned:
+                first = failed  # the arm moved: the scene is no longer as the other sides would plan from
                 break
-            first = first or (result, (stand.x, stand.y))
+            first = first or failed
         assert first is not None  # `_sides` gives one side at least
         failure, stood = first
         if isinstance(failure, SkillPlanError):  # say so where no side brings the thing within reach
@@ -169,16 +180,19 @@ class Picks:
         return SkillResult(False, failure.reason + (beyond_reach(top, stood) if failure.unplanned else ""))
 
     def _keep_clear_of(self, surface: Instance, top: np.ndarray, radius: float, table_top: float,
-                       in_storage: bool) -> list[list[np.ndarray]]:
+                       in_storage: bool, covers: bool) -> list[list[np.ndarray]]:
         """The point sets a spot to put a thing down on keeps clear of, in the order they are tried:
-        every remembered thing but ``surface``, what the doors and drawers sweep and the lanes to
-        their handles (`kept_clear`), and the lane from where the thing stood (``top``, its top
-        grasp point; ``radius``, its footprint's) to the robot (`way_out`); then, for a thing in
-        the open, the same but that lane. A thing is picked away for what it hides, and that is
-        reached for next along the lane: a box lifted off a smaller one and put down right before
-        it held back the hand leaning over it to the smaller one's near edge, which closed on
-        nothing above its top (recursive 1154 and 1160 of tuning-wide); out of storage, it hid the
-        smaller box's lower half from the cameras (recursive 1075), and there the lane is kept.
+        every remembered thing but ``surface`` and what the doors and drawers sweep and the lanes to
+        their handles (`kept_clear`); for a thing out of storage (``in_storage``) or one that may
+        cover what stands under it (``covers``: `COVER_LABELS`, what the decision module lifts to
+        look beneath), the lane from where it stood (``top``, its top grasp point; ``radius``, its
+        footprint's) to the robot (`way_out`) too. What such a thing hid is reached for next
+        along that lane: a box lifted off a smaller one and put down right before it held back the
+        hand leaning over it to the smaller one's near edge, which closed on nothing above its top
+        (recursive 1154 and 1160 of tuning-wide); out of storage, it hid the smaller box's lower
+        half from the cameras (recursive 1075). In the open, where no spot clear of the lane is
+        free or the pick finds no plan to one, the same sets but the lane are tried after (a box
+        0.31 m wide 0.94 m out, its spots beside the lane, reached none: recursive 1064).
 
         Returns:
             One or two lists of (N, 3) point sets.
@@ -188,7 +202,9 @@ class Picks:
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
         lane = way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M)
-        return [[*others, *clear, lane]] if in_storage else [[*others, *clear, lane], [*others, *clear]]
+        if in_storage:
+            return [[*others, *clear, lane]]
+        return [[*others, *clear, lane], [*others, *clear]] if covers else [[*others, *clear]]
 
     def _sides(self, table: TableSides, top: np.ndarray, front_only: bool = False
                ) -> list[tuple[int, tuple[float, float]]]:
@@ -218,7 +234,7 @@ class Picks:
 
     def _stand_and_spots(self, obj: Instance, surface: Instance, table: TableSides, side: int,
                          grasp_along: tuple[float, float], top: np.ndarray, extent: np.ndarray,
-                         keep_clear_of: list[list[np.ndarray]], radius: float) -> tuple[Pose2D, np.ndarray]:
+                         keep_clear: list[np.ndarray], radius: float, may_stack: bool) -> tuple[Pose2D, np.ndarray]:
         """Where on ``side``'s line the base stands to pick ``obj`` (its arm reaching the object from
         anywhere in ``grasp_along``) and the spots to put it down that the arm reaches from there,
         nearest first (`_put_down_spots`): sought first towards the robot from the object (towards
@@ -244,7 +260,8 @@ class Picks:
             ahead = table.local(FRONT, places[:, :2])[:, 1] - table.line(FRONT)
             return reachable(places) & (ahead >= body.head_sees_from)
 
-        spots = self._put_down_spots(obj, surface, keep_clear_of, radius, near, extent, beyond_strip, reachable)
+        spots = self._put_down_spots(obj, surface, keep_clear, radius, near, extent, beyond_strip, reachable,
+                                     may_stack)
         (place_lo,), (place_hi,) = reach_along(table.local(side, spots[:1, :2]), line, PLACE_REACH_M)
         lo_along, hi_along = max(grasp_lo, place_lo), min(grasp_hi, place_hi)
         along = float(np.clip(table.along(side, top), lo_along, hi_along))
@@ -269,37 +286,34 @@ class Picks:
         raise SkillPlanError(f"no stand at the table's {SIDE_NAMES[side]} from which the arm comes out of the base "
                              "clear of what stands there")
 
-    def _put_down_spots(self, obj: Instance, surface: Instance, keep_clear_of: list[list[np.ndarray]],
-                        radius: float, near: np.ndarray, extent: np.ndarray,
-                        beyond_strip: Callable[[np.ndarray], np.ndarray],
-                        reachable: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    def _put_down_spots(self, obj: Instance, surface: Instance, keep_clear: list[np.ndarray], radius: float,
+                        near: np.ndarray, extent: np.ndarray, beyond_strip: Callable[[np.ndarray], np.ndarray],
+                        reachable: Callable[[np.ndarray], np.ndarray], may_stack: bool) -> np.ndarray:
         """Where ``obj`` (of ``extent``, ``radius`` across its footprint) may be put down, nearest
-        ``near`` first: free places of ``surface`` clear of the first point sets of
-        ``keep_clear_of`` (`_keep_clear_of`) beyond the strip the arm works over from the robot's
-        stands (``beyond_strip``), else in it (``reachable``); else clear of the next sets, the
-        same way; else on top of a thing put away before it (`_on_a_thing_away`).
+        ``near`` first: free places of ``surface`` clear of ``keep_clear`` beyond the strip the arm
+        works over from the robot's stands (``beyond_strip``), else in it (``reachable``), else,
+        ``may_stack``, on top of a thing put away before it (`_on_a_thing_away`).
 
         Returns:
             (k, 3): the spots (x, y, top z).
 
         Raises:
-            SkillPlanError: no place is free (the reason the surface gives, clear of the last sets).
+            SkillPlanError: no place is free (the reason the surface gives).
         """
         options = {"height": float(extent[2]), "count": PLACES, "apart_m": PLACES_APART_M}
-        no_room: SkillPlanError | None = None
-        for obstacles in keep_clear_of:
-            for allowed, means in ((beyond_strip, "within the arm's reach beyond the strip before the robot"),
-                                   (reachable, "within the arm's reach")):
-                try:
-                    return idle_spot(surface.points(), obstacles, radius, near, allowed=allowed, allowed_means=means,
-                                     **options)
-                except SkillPlanError as error:
-                    no_room = error
-        spots = self._on_a_thing_away(obj, extent, reachable)
-        if spots is None:
-            assert no_room is not None  # one list of sets at least
-            raise no_room
-        return spots
+        try:
+            return idle_spot(surface.points(), keep_clear, radius, near, allowed=beyond_strip,
+                             allowed_means="within the arm's reach beyond the strip before the robot", **options)
+        except SkillPlanError:
+            pass
+        try:
+            return idle_spot(surface.points(), keep_clear, radius, near, allowed=reachable,
+                             allowed_means="within the arm's reach", **options)
+        except SkillPlanError as no_room:
+            spots = self._on_a_thing_away(obj, extent, reachable) if may_stack else None
+            if spots is None:
+                raise no_room from None
+            return spots
 
     def _on_a_thing_away(self, obj: Instance, extent: np.ndarray, reachable: Callable[[np.ndarray], np.ndarray]
                          ) -> np.ndarray | None:
