@@ -120,17 +120,18 @@ class Route:
         return "back off" if self.backs_off else "back up"
 
     def stages(self) -> list[tuple[str, str, Any]]:
-        """The chain's stages: the approach, down, lift, out, carry, in, lower, back up. The object
-        is carried ``lift`` above where it stood and above its place, not above the release
-        (``rise`` higher): lowered from that much higher into the cabinet it was lifted out of, a
-        box 10 cm tall under a board 12.6 cm over it came 3 mm short of the board with the arm's
-        margin, and no route put it back (recursive 1173 of tuning-wide).
+        """The chain's stages: the approach, down, lift, out, carry, in, lower, back up. Brought into
+        storage (``inward``), the object is carried ``lift`` above its place, as high as it was
+        lifted where it stood, not above the release (``rise`` higher): lowered from that much
+        higher into the cabinet it was lifted out of, a box 10 cm tall under a board 12.6 cm over
+        it came 3 mm short of the board with the arm's margin, and no route put it back (recursive
+        1173 of tuning-wide). In the open it is carried ``lift`` above the release.
 
         Returns:
             (what, "free" or "line", the TCP's world target) of each, in order.
         """
         above_grasp = shifted(self.grasp, self.lift * UP)
-        above_release = shifted(self.release, (self.lift - self.rise) * UP)
+        above_release = shifted(self.release, (self.lift - (self.rise if np.any(self.inward) else 0.0)) * UP)
         stages = [*self.approach, (self.down, "line", self.grasp), ("lift", "line", above_grasp)]
         if np.any(self.out):
             stages.append(("out", "line", shifted(above_grasp, self.out)))
