@@ -35,7 +35,7 @@ from agent.pose import Pose2D
 from skills.arm.grasps import ObjectGrasp
 from skills.arm.fold_plans import unfold_problem
 from skills.arm.headroom import under_a_board
-from skills.arm.idle_space import idle_spot, reach_along, stack_spot
+from skills.arm.idle_space import HAND_RADIUS_M, idle_spot, reach_along, stack_spot
 from skills.arm.skill_plan import SkillPlanError
 from skills.base import SkillResult as ArmResult
 from skills.robot_body import RobotBody, surface_top
@@ -141,11 +141,12 @@ class Picks:
         box = (np.r_[box[0][:2], min(box[0][2], box[1][2] - extent[2])], box[1])  # down to what it stands on
         radius = float(max(extent[:2])) / 2
         in_storage = under_a_board(top, extent, keep_off)
-        keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage, obj.label in COVER_LABELS)
         front_only = in_storage or bool(self.parts.standing_open())
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
         for side, grasp_along in self._sides(table, top, front_only):
             failed: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # of the last spots sought
+            keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage,
+                                                obj.label in COVER_LABELS, table.stand(side, table.along(side, top)))
             for tier, keep_clear in enumerate(keep_clear_of):
                 try:
                     stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
@@ -180,19 +181,24 @@ class Picks:
         return SkillResult(False, failure.reason + (beyond_reach(top, stood) if failure.unplanned else ""))
 
     def _keep_clear_of(self, surface: Instance, top: np.ndarray, radius: float, table_top: float,
-                       in_storage: bool, covers: bool) -> list[list[np.ndarray]]:
+                       in_storage: bool, covers: bool, level: Pose2D) -> list[list[np.ndarray]]:
         """The point sets a spot to put a thing down on keeps clear of, in the order they are tried:
         every remembered thing but ``surface`` and what the doors and drawers sweep and the lanes to
-        their handles (`kept_clear`); for a thing out of storage (``in_storage``) or one that may
-        cover what stands under it (``covers``: `COVER_LABELS`, what the decision module lifts to
-        look beneath), the lane from where it stood (``top``, its top grasp point; ``radius``, its
-        footprint's) to the robot (`way_out`) too. What such a thing hid is reached for next
-        along that lane: a box lifted off a smaller one and put down right before it held back the
-        hand leaning over it to the smaller one's near edge, which closed on nothing above its top
-        (recursive 1154 and 1160 of tuning-wide); out of storage, it hid the smaller box's lower
-        half from the cameras (recursive 1075). In the open, where no spot clear of the lane is
-        free or the pick finds no plan to one, the same sets but the lane are tried after (a box
-        0.31 m wide 0.94 m out, its spots beside the lane, reached none: recursive 1064).
+        their handles (`kept_clear`); and a lane (`way_out`) from where the thing stood (``top``,
+        its top grasp point) to the robot. Out of storage (``in_storage``), the lane to where the
+        robot started, as wide as the thing (``radius``, its footprint's): put down in front of the
+        cabinet it came from, a box hid the smaller box it had covered from the robot's cameras and
+        stood in the way of the hand reaching in for it (recursive 1075 of tuning-wide). In the
+        open, for a thing that may cover what stands under it (``covers``: `COVER_LABELS`, what the
+        decision module lifts to look beneath), the lane to the stand level with it on the side it
+        is picked from (``level``), from where the hand reaches for what it covered next, as wide
+        as the hand across its axis at the least (`HAND_RADIUS_M`): a box lifted off a smaller one
+        and put down right before it held back the hand leaning over it to the smaller one's near
+        edge, which closed on nothing above its top (recursive 1154 and 1160), and put down beside a
+        lane to where the robot started, the hand's palm caught its corner (1128). In the open,
+        where no spot clear of that lane is free or the pick finds no plan to one, the same sets but
+        the lane are tried after (a box 0.31 m wide 0.94 m out, its spots beside the lane, reached
+        none: recursive 1064).
 
         Returns:
             One or two lists of (N, 3) point sets.
@@ -201,10 +207,12 @@ class Picks:
         assert body.home is not None
         others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
         clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
-        lane = way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M)
         if in_storage:
-            return [[*others, *clear, lane]]
-        return [[*others, *clear, lane], [*others, *clear]] if covers else [[*others, *clear]]
+            return [[*others, *clear, way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M)]]
+        if not covers:
+            return [[*others, *clear]]
+        lane = way_out(top, max(radius, HAND_RADIUS_M), np.array([level.x, level.y]), table_top + LANE_ABOVE_M)
+        return [[*others, *clear, lane], [*others, *clear]]
 
     def _sides(self, table: TableSides, top: np.ndarray, front_only: bool = False
                ) -> list[tuple[int, tuple[float, float]]]:
