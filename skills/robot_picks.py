@@ -104,13 +104,13 @@ class Picks:
         that may cover another or one out of storage, out of the lane from where it stood to the
         robot (in the open, where no such spot is free or no plan is found to one, in it:
         `_keep_clear_of`); where none is free, on top of a thing it put out of the way before
-        (`_on_a_thing_away`). The base stands
-        at the table's front, where the robot started; where no spot is free or no plan is found
-        from there, at the other sides of the table that the arm reaches the thing from, the
-        nearest first, unless the thing is in storage or a part this robot opened stands open
-        (`_sides`). A thing standing in a drawer the robot opened reaches down to the drawer's
-        floor (`_drawer_floor`). Lifted out of a door or drawer standing open, the wrist camera
-        looks in again at what it covered (`DoorsAndDrawers.look_again_into`).
+        (`_on_a_thing_away`). The base stands at the table's front, where the robot started; where
+        no spot is free or no plan is found from there, at the other sides of the table that the
+        arm reaches the thing from, the nearest first, unless the thing is in storage or a part
+        this robot opened stands open (`_sides`). A thing standing in a drawer the robot opened
+        reaches down to the drawer's floor (`_drawer_floor`). Lifted out of a door or drawer
+        standing open, the wrist camera looks in again at what it covered
+        (`DoorsAndDrawers.look_again_into`).
 
         Args:
             obj: the thing to move out of the way.
@@ -145,15 +145,15 @@ class Picks:
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
         for side, grasp_along in self._sides(table, top, front_only):
             failed: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # of the last spots sought
+            level = table.stand(side, table.along(side, top))
             keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage,
-                                                obj.label in COVER_LABELS, table.stand(side, table.along(side, top)))
+                                                obj.label in COVER_LABELS, level)
             for tier, keep_clear in enumerate(keep_clear_of):
                 try:
                     stand, spots = self._stand_and_spots(obj, surface, table, side, grasp_along, top, extent,
                                                          keep_clear, radius, may_stack=tier == len(keep_clear_of) - 1)
                     self.parts.drive(stand)
                 except SkillPlanError as error:
-                    level = table.stand(side, table.along(side, top))
                     failed = (error, (level.x, level.y))
                     continue
                 places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
