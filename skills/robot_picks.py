@@ -142,11 +142,14 @@ class Picks:
         radius = float(max(extent[:2])) / 2
         in_storage = under_a_board(top, extent, keep_off)
         front_only = in_storage or bool(self.parts.standing_open())
+        others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
+        in_the_way = [*others, *kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(),
+                                           self.parts.open_parts())]
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
         for side, grasp_along in self._sides(table, top, front_only):
             failed: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # of the last spots sought
             level = table.stand(side, table.along(side, top))
-            keep_clear_of = self._keep_clear_of(surface, top, radius, table_top, in_storage,
+            keep_clear_of = self._keep_clear_of(in_the_way, top, radius, table_top, in_storage,
                                                 obj.label in COVER_LABELS, level)
             for tier, keep_clear in enumerate(keep_clear_of):
                 try:
@@ -180,15 +183,16 @@ class Picks:
             raise SkillPlanError(f"{failure}{beyond_reach(top, stood)}") from None
         return SkillResult(False, failure.reason + (beyond_reach(top, stood) if failure.unplanned else ""))
 
-    def _keep_clear_of(self, surface: Instance, top: np.ndarray, radius: float, table_top: float,
+    def _keep_clear_of(self, in_the_way: list[np.ndarray], top: np.ndarray, radius: float, table_top: float,
                        in_storage: bool, covers: bool, level: Pose2D) -> list[list[np.ndarray]]:
         """The point sets a spot to put a thing down on keeps clear of, in the order they are tried:
-        every remembered thing but ``surface`` and what the doors and drawers sweep and the lanes to
-        their handles (`kept_clear`); and a lane (`way_out`) from where the thing stood (``top``,
-        its top grasp point) to the robot. Out of storage (``in_storage``), the lane to where the
-        robot started, as wide as the thing (``radius``, its footprint's): put down in front of the
-        cabinet it came from, a box hid the smaller box it had covered from the robot's cameras and
-        stood in the way of the hand reaching in for it (recursive 1075 of tuning-wide). In the
+        ``in_the_way`` (every remembered thing but the surface, what the doors and drawers sweep
+        and the lanes to their handles: `kept_clear`, worked out once for every side); and a lane
+        (`way_out`) from where the thing stood (``top``, its top grasp point) to the robot. Out of
+        storage (``in_storage``), the lane to where the robot started, as wide as the thing
+        (``radius``, its footprint's): put down in front of the cabinet it came from, a box hid the
+        smaller box it had covered from the robot's cameras and stood in the way of the hand
+        reaching in for it (recursive 1075 of tuning-wide). In the
         open, for a thing that may cover what stands under it (``covers``: `COVER_LABELS`, what the
         decision module lifts to look beneath), the lane to the stand level with it on the side it
         is picked from (``level``), from where the hand reaches for what it covered next, as wide
@@ -203,16 +207,14 @@ class Picks:
         Returns:
             One or two lists of (N, 3) point sets.
         """
-        body = self.body
-        assert body.home is not None
-        others = [inst.points() for inst in body.memory.live() if inst.id != surface.id]
-        clear = kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(), self.parts.open_parts())
+        home = self.body.home
+        assert home is not None
         if in_storage:
-            return [[*others, *clear, way_out(top, radius, body.home[:2], table_top + LANE_ABOVE_M)]]
+            return [[*in_the_way, way_out(top, radius, home[:2], table_top + LANE_ABOVE_M)]]
         if not covers:
-            return [[*others, *clear]]
+            return [in_the_way]
         lane = way_out(top, max(radius, HAND_RADIUS_M), np.array([level.x, level.y]), table_top + LANE_ABOVE_M)
-        return [[*others, *clear, lane], [*others, *clear]]
+        return [[*in_the_way, lane], in_the_way]
 
     def _sides(self, table: TableSides, top: np.ndarray, front_only: bool = False
                ) -> list[tuple[int, tuple[float, float]]]:
