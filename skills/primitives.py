@@ -141,13 +141,15 @@ class _Pick(ArmSkill):
                    "stands on, which the hand is to keep off", default=None),
         input_port("grasp_first", ObjectGrasp, "a grasp to try before all others: the one the object was "
                    "taken away by, to put it back the way it came", default=None),
+        input_port("near_edge", bool, "after every other route, hold a top beyond the hand's reach from above "
+                   "by its near edge", default=False),
     )
 
     def plan(self, planner: ArmPlanner, q: np.ndarray, base_pose: Pose2D,
              inputs: Mapping[str, Any]) -> SkillPlan:
         return planner.plan_pick(q, base_pose, inputs["object_point"], inputs["object_extent"], inputs["place_point"],
                                  surface_z=inputs["surface_z"], skill=self.skill_name, keep_off=inputs["keep_off"],
-                                 grasp_first=inputs["grasp_first"])
+                                 grasp_first=inputs["grasp_first"], near_edge=inputs["near_edge"])
 
     def summary(self, result: SkillResult) -> str:
         place = result.info.get("place_point")

@@ -9,8 +9,10 @@
   facing the table, and where that fails, along the other sides that the arm reaches the object
   from, the nearest first (`skills.table_sides`), at a stand where the arm comes out of the base
   clear of what stands there; where no place on it is free, on top of a thing put out of the way
-  before it (`stack_spot`);
-- pick back: from the stand it was picked from, from where it was put down to where it was.
+  before it (`stack_spot`); where no side finds a plan, every side again, by the near edge of a
+  top in the open too;
+- pick back: from the stand it was picked from, from where it was put down to where it was, by the
+  near edge of its top last.
 
 The box a thing filled before it was picked away is kept while it is away (``vacated``): what is
 found there lay inside it (the Matryoshka's smaller doll).
@@ -107,7 +109,11 @@ class Picks:
         (`_on_a_thing_away`). The base stands at the table's front, where the robot started; where
         no spot is free or no plan is found from there, at the other sides of the table that the
         arm reaches the thing from, the nearest first, unless the thing is in storage or a part
-        this robot opened stands open (`_sides`). A thing standing in a drawer the robot opened
+        this robot opened stands open (`_sides`). Where no plan is found from any side, a thing in
+        the open is tried again from each, by the near edge of its top as well (``near_edge`` of
+        `skills.arm.pick_plans.plan_pick`: a top beyond the hand's reach from above, between the
+        cabinets at a table's back, recursive 1182 of tuning-wide); not before, since no other grasp
+        holds a box less surely. A thing standing in a drawer the robot opened
         reaches down to the drawer's floor (`_drawer_floor`). Lifted out of a door or drawer
         standing open, the wrist camera looks in again at what it covered
         (`DoorsAndDrawers.look_again_into`).
@@ -146,7 +152,11 @@ class Picks:
         in_the_way = [*others, *kept_clear(body.memory, body.eye, body.home[:2], self.parts.done_with(),
                                            self.parts.open_parts())]
         first: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # and where it stood
-        for side, grasp_along in self._sides(table, top, front_only):
+        sides = self._sides(table, top, front_only)
+        tries = [(side, along, False) for side, along in sides]
+        if not in_storage:  # the near edge after every side: no other grasp holds a box less surely
+            tries += [(side, along, True) for side, along in sides]
+        for side, grasp_along, near_edge in tries:
             failed: tuple[SkillPlanError | ArmResult, tuple[float, float]] | None = None  # of the last spots sought
             level = table.stand(side, table.along(side, top))
             keep_clear_of = self._keep_clear_of(in_the_way, top, radius, table_top, in_storage,
@@ -161,7 +171,8 @@ class Picks:
                     continue
                 places = spots + np.array([0.0, 0.0, extent[2]])  # its top, as it stands
                 result = body.run("pick_away", object_point=top, object_extent=extent, place_point=places,
-                                  surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off)
+                                  surface_z=table_top, label=f"{obj.label} {obj.id}", keep_off=keep_off,
+                                  near_edge=near_edge)
                 if result.ok:
                     place = np.asarray(result.info.get("place_point", places[0]), dtype=float)
                     body.memory.move(obj.id, _translation(place - top), carried=True)
@@ -401,7 +412,7 @@ class Picks:
         now = np.array([*(away.placed_point[:2] + moved), now[2]])
         result = body.run("pick_back", object_point=now, object_extent=away.extent, place_point=away.grasp_point,
                           surface_z=body.surface_z(away.grasp_point),  # under its place, below its top
-                          label=f"{obj.label} {obj.id}", grasp_first=away.grasp,
+                          label=f"{obj.label} {obj.id}", grasp_first=away.grasp, near_edge=True,
                           keep_off=self._near(obj, covering=body.remembered(self.vacated, obj)))
         if result.ok:
             body.memory.move(obj.id, _translation(away.grasp_point - now), carried=True)

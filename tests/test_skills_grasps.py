@@ -13,6 +13,7 @@ from skills.arm.grasps import (
     EDGE_INSET_M,
     FINGERTIP_M,
     HANDLE_TOP_M,
+    OPEN_EDGE_INSET_M,
     TOP_PITCHES,
     closing_directions,
     fingertips_on,
@@ -110,6 +111,19 @@ def test_objects_that_fit_are_grasped_around_and_wider_ones_by_their_top() -> No
     assert [round(float(math.degrees(math.acos(-g.rotation[2, 2])))) for g in edge] == [0, 0, 30, 30, 50, 50, 65, 65]
     assert all(g.rotation[0, 2] > 0 for g in edge[2:])  # the approach leans away: the wrist nearer the base
     assert all(abs(g.rotation[:, 1] @ [1.0, 0.0, 0.0]) < 1e-9 for g in edge)  # closing across the line of sight
+
+
+def test_fingertips_on_a_near_edge_seen_at_a_slant_stay_the_inset_inside_every_side() -> None:
+    # recursive 1182 (tuning-wide): seen at a slant, the box's width along the line of sight put the
+    # fingertips meant 6 cm inside its near side 2 cm inside it, and they held nothing.
+    size, point, base = np.array([0.25, 0.32, 0.08]), np.array([0.3, 0.3, 0.83]), (0.0, 0.0, 0.0)
+    for inset in (EDGE_INSET_M, OPEN_EDGE_INSET_M):
+        edge = [g for g in object_grasps(size, point, base, 0.075, 0.02, edge_inset_m=inset)
+                if g.name == "fingertips-on-near-edge"]
+        assert len(edge) == 8
+        for grasp in edge:  # towards the robot along the line of sight, the inset inside the side nearest
+            assert grasp.offset == pytest.approx([-(0.125 - inset), -(0.125 - inset), 0.0], abs=1e-9)
+            assert np.all(np.abs(grasp.offset[:2]) <= size[:2] / 2 - inset + 1e-9)
 
 
 def test_fingers_close_along_the_line_of_sight_only_around_a_voxel_more_than_the_memory_saw() -> None:

@@ -16,8 +16,9 @@ from skills.arm.clearance import CLEARANCE_M, Carried, Clearance, box_points
 from skills.arm.headroom import LIFT_M, LIFT_SPARE_M, over_the_rim, over_the_way
 from skills.arm.frames import base_transform, pose_at
 from skills.arm.grasp_lines import APPROACH_M
-from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, SIDE_TCP_HEIGHT_M, TOUCH_SEARCH_M,
-                               ObjectGrasp, front_clearance, hand_bottom, hand_touches, side_grasps, top_rotation)
+from skills.arm.grasps import (EDGE_INSET_M, FINGERTIP_M, HANDLE_TOP_M, LIFT_OFF_M, OPEN_EDGE_INSET_M,
+                               SIDE_TCP_HEIGHT_M, TOUCH_SEARCH_M, ObjectGrasp, front_clearance, hand_bottom,
+                               hand_touches, side_grasps, top_rotation)
 from skills.arm.ik_search import IKSearch
 from skills.arm.link_shells import LINK_RADIUS_M
 from skills.arm.part_plans import PUSH_PAST
@@ -885,3 +886,28 @@ def test_a_box_lifted_out_from_under_a_board_goes_back_in_as_it_came_out(planner
     start = base_transform(BASE) @ planner.kin.forward(lowered.samples[0])
     release = back.info["release_pose"]
     assert start[2, 3] - release[2, 3] == pytest.approx(back.info["lift_m"] - 0.015, abs=0.002)
+
+
+def test_a_box_beyond_a_hand_s_reach_from_above_between_two_cabinets_is_held_by_its_near_edge_only_when_asked(
+        planner: ArmPlanner) -> None:
+    # recursive 1182 (tuning-wide): a nest on the table 1.0 m out between the storage at its back.
+    # No route reaches its top clear, and every route taken unchecked carries it through a cabinet.
+    # Held by the near edge, 6 cm inside it, it is lifted clear; asked only after every other side
+    # of the table, since no other grasp holds a box less surely.
+    base_pose = (0.038, -0.735, math.pi / 2)
+    top, size = np.array([0.038, 0.264, 0.834]), np.array([0.25, 0.32, 0.08])
+    cabinets = np.vstack([box_points(np.array([-0.42, 0.255, 0.955]), np.array([0.35, 0.36, 0.4])),
+                          box_points(np.array([0.415, 0.255, 0.925]), np.array([0.32, 0.36, 0.34]))])
+    places = np.array([[0.215, -0.105, 0.835], [0.375, -0.125, 0.835]])
+    with pytest.raises(SkillPlanError, match=r"^pick: no route clear of what stands near, and every route taken "
+                                             r"unchecked that reaches would carry it through what stands near"):
+        planner.plan_pick(np.array(READY), base_pose, top, size, places, surface_z=SURFACE, keep_off=cabinets)
+    plan = planner.plan_pick(np.array(READY), base_pose, top, size, places, surface_z=SURFACE, keep_off=cabinets,
+                             near_edge=True)
+    assert plan.info["clear"] and plan.info["grasp"] == "fingertips-on-near-edge"
+    assert plan.info["grasp_way"].offset == pytest.approx([0.0, -(size[1] / 2 - OPEN_EDGE_INSET_M), 0.0], abs=1e-6)
+    clearance = Clearance(planner, base_transform(base_pose), SURFACE, cabinets)
+    for step in plan.steps:
+        if step.kind == "move" and step.name.startswith("to "):
+            assert clearance.path_problem(step.samples, every=3) is None, step.name
+    _check_runnable(plan, np.array(READY))

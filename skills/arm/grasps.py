@@ -79,6 +79,10 @@ LEVEL_SIN = 0.1
 HANDLE_DEPTH_M = 0.0
 #: How far inside a top's near edge (m) fingertips rest when its middle is out of reach.
 EDGE_INSET_M = 0.03
+#: The same in the open, where no board limits how far in the hand leans: at its idle spot the
+#: memory had a box's near side 1.5 cm nearer the robot than it stood, and fingertips meant to rest
+#: 3 cm inside it came down at its very edge and held nothing (recursive 1182 of tuning-wide).
+OPEN_EDGE_INSET_M = 0.06
 #: How far (rad from straight down) the hand on a top's near edge leans back towards the robot, in
 #: the order tried: the wrist then stands nearer the base than the fingertips, and at the steepest,
 #: under a board close over the top, out of the storage it reached into.
@@ -361,7 +365,7 @@ def across(size: np.ndarray, direction: np.ndarray) -> float:
 
 
 def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, opening: float,
-                  depth: float) -> list[ObjectGrasp]:
+                  depth: float, edge_inset_m: float = EDGE_INSET_M) -> list[ObjectGrasp]:
     """Top-down grasps of an object, best first.
 
     Args:
@@ -370,6 +374,7 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
         base_pose: where the base stands.
         opening: the widest the object may be across the fingers to close around it (m).
         depth: how far below the point the fingers close around it (m).
+        edge_inset_m: how far inside the near edge the fingertips rest on it.
 
     Returns:
         The fingers around it along each of `closing_directions` it fits within ``opening`` (a
@@ -389,13 +394,22 @@ def object_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D, openin
     grasps = [ObjectGrasp(top_rotation(d), -FINGERTIP_M, "fingertips-on-top", touch=True) for d in directions]
     if np.linalg.norm(sight) < 1e-6:
         return grasps
-    inset = across(size, sight) / 2 - EDGE_INSET_M
-    if inset < 0.01:
+    out = _inside_towards(size, -sight, edge_inset_m)
+    if out < 0.01:
         return grasps
     closing = np.array([-sight[1], sight[0], 0.0])
     return grasps + [ObjectGrasp(top_rotation(sign * closing, pitch, sight), -FINGERTIP_M, "fingertips-on-near-edge",
-                                 touch=True, offset=-inset * sight)
+                                 touch=True, offset=-out * sight)
                      for pitch in EDGE_PITCHES for sign in (1.0, -1.0)]
+
+
+def _inside_towards(size: np.ndarray, direction: np.ndarray, inset: float) -> float:
+    """How far from the middle of a box's top (m) along a level unit ``direction`` a point stays
+    ``inset`` inside every side: seen at a slant, the near edge of a box at its idle spot lay nearer
+    along the line of sight than its width along that line, and fingertips meant 6 cm inside came
+    down 2 cm inside it (recursive 1182 of tuning-wide)."""
+    room = [(float(size[k]) / 2 - inset) / abs(float(direction[k])) for k in (0, 1) if abs(float(direction[k])) > 1e-9]
+    return min(room) if room else 0.0
 
 
 def side_grasps(size: np.ndarray, point: np.ndarray, base_pose: Pose2D) -> list[ObjectGrasp]:

@@ -28,10 +28,11 @@ from skills.arm.arm_model import ArmModel
 from skills.arm.clearance import Carried, Clearance, box_points
 from skills.arm.frames import base_transform
 from skills.arm.grasp_lines import searched
-from skills.arm.grasps import UP, ObjectGrasp, object_grasps, side_grasps
+from skills.arm.grasps import OPEN_EDGE_INSET_M, UP, ObjectGrasp, object_grasps, side_grasps
 from skills.arm.headroom import LIFT_M, headroom, over_the_rim, over_the_way, too_low_to_lift
 from skills.arm.ik_search import IKSearch, PostureCheck
-from skills.arm.pick_routes import LEANING_ROOM_M, Route, Way, clear_routes, lifts, plain_routes, ways
+from skills.arm.pick_routes import (LEANING_ROOM_M, Route, Way, clear_routes, edge_routes_in_the_open, lifts,
+                                    plain_routes, ways)
 from skills.arm.plan_builder import PlanBuilder
 from skills.arm.skill_plan import SkillPlan, SkillPlanError, best_failure, checked_vector
 
@@ -54,7 +55,7 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
               extent: Sequence[float], place_point: Sequence[float], *, skill: str = "pick_away",
               surface_z: float | None = None, lift_m: float = LIFT_M, clearance_m: float = 0.015,
               grasp_depth_m: float | None = None, keep_off: np.ndarray | None = None,
-              grasp_first: ObjectGrasp | None = None) -> SkillPlan:
+              grasp_first: ObjectGrasp | None = None, near_edge: bool = False) -> SkillPlan:
     """Pick an object and put it down elsewhere (see the module doc).
 
     Args:
@@ -81,6 +82,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
             close across the line of sight, where the memory places things best, and a bottle held
             again as it had been taken away, across the line of sight from where it stood, was
             missed (occlusion 1027). Fingertips on a wide box's top are, wherever it stands.
+        near_edge: after every other route, seek those of the grasps of the near edge of a top in
+            the open (`edge_routes_in_the_open`), the fingertips `OPEN_EDGE_INSET_M` inside it:
+            for a top beyond the hand's reach from above, where no other stand reaches it
+            (`skills.robot_picks.Picks.pick_away` asks last). Held so, a box is less sure in the
+            hand than by any other grasp: sought from the front before the other sides were, it
+            took two picks away from the sides that lifted them and closed on nothing.
 
     Returns:
         The plan; ``info["grasp"]`` says whether the fingers close around the object or their tips
@@ -134,6 +141,12 @@ def plan_pick(arm: ArmModel, q: np.ndarray, base_pose: Pose2D, object_point: Seq
                                              if grasp_first.touch or np.any(route.inward) or np.any(route.out)]
     ways_to, routes = sought(grasps)
     routes = [*first, *routes, *((route, False) for route in plain_routes(ways_to[0], lift_m, keep_off))]
+    if near_edge:  # last, where asked: the near edge of a top beyond the hand's reach from above
+        open_edges = object_grasps(size, top, base_pose, arm.gripper_opening - 2 * STRADDLE_CLEARANCE_M, depth,
+                                   edge_inset_m=OPEN_EDGE_INSET_M)
+        routes += [(route, True) for place in places for route in edge_routes_in_the_open(
+            ways(open_edges, top, place, size, lift_m, clearance_m, keep_off), lift_m, size, keep_off, toward,
+            _toward(base_pose, place), over_the_way(top, place, size, keep_off))]
     carried_into = False
     for route, clear in routes:
         way, grasp, release = route.way, route.grasp, route.release

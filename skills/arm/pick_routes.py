@@ -213,25 +213,62 @@ def clear_routes(choices: list[Way], lift_m: float, size: np.ndarray, keep_off: 
     side_ways = [entry for entry in choices if entry.grasp_way.name == SIDE]
     tight = room < lifts(lift_m, size)[-1] + LEANING_ROOM_M
     for entry in [*(side_ways + edge_ways if tight else edge_ways + side_ways), *open_ways]:
-        way, grasp, release = entry.grasp_way, entry.grasp, entry.release
-        here, there = entry.confined_here, entry.confined_there
-        if way.name in (EDGE, SIDE) and not (here or there):
+        if entry.grasp_way.name in (EDGE, SIDE) and not (entry.confined_here or entry.confined_there):
             continue
-        out_along, in_along = (-way.rotation[:, 2], -way.rotation[:, 2]) if way.name == SIDE else (toward, to_place)
-        for lift in lifts(lift_m, size)[::-1] if here or there else _open_lifts(lift_m, over):
-            if way.name == SIDE:
-                approaches = _side_approaches(grasp)
-            else:
-                approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
-            for approach in approaches:
-                for out, inward in _detours(here, there):
-                    routes.append(Route(way, grasp, release, lift, tuple(approach), out * out_along,
-                                        inward * in_along, entry.rise))
+        routes += _routes_of(entry, lift_m, size, keep_off, toward, to_place, over)
 
     def in_storage(route: Route) -> bool:  # open routes first, stable: else in the order built
         return bool(np.any(route.out) or np.any(route.inward) or route.way.name in (EDGE, SIDE))
 
     return sorted(routes, key=in_storage)[:CLEAR_ROUTES]
+
+
+def edge_routes_in_the_open(choices: list[Way], lift_m: float, size: np.ndarray, keep_off: np.ndarray | None,
+                            toward: np.ndarray, to_place: np.ndarray, over: float = 0.0) -> list[Route]:
+    """The routes of the grasps of an object's near edge, the steepest lean first, where no board
+    stands close over it or its place: sought after every other route, checked or taken
+    unchecked, has failed. From above, the hand reaches a top about 0.85 m from the base's axis; a
+    nest of boxes on the table 1.0 m out beside the storage at its back was out of its reach from
+    the front, and from the back no free place was within reach (recursive 1182 of tuning-wide);
+    its near edge, 0.1 m nearer, is reached leaning back.
+
+    Args:
+        choices: the grasps' ways to one place (`ways`); those of the near edge count.
+        lift_m: the usual lift (m).
+        size: the object's box (dx, dy, dz).
+        keep_off: (N, 3) points of what stands near, or None.
+        toward: the level unit vector from the object towards the base.
+        to_place: the same from its place.
+        over: as for `clear_routes`.
+
+    Returns:
+        The routes, `CLEAR_ROUTES` at most.
+    """
+    edges = sorted((entry for entry in choices if entry.grasp_way.name == EDGE
+                    and not (entry.confined_here or entry.confined_there)),
+                   key=lambda entry: -float(entry.grasp_way.rotation[2, 2]))
+    return [route for entry in edges for route in _routes_of(entry, lift_m, size, keep_off, toward, to_place, over)
+            ][:CLEAR_ROUTES]
+
+
+def _routes_of(entry: Way, lift_m: float, size: np.ndarray, keep_off: np.ndarray | None, toward: np.ndarray,
+               to_place: np.ndarray, over: float) -> list[Route]:
+    """One way's routes, by each lift (`lifts` where a board stands close over either end, else
+    `_open_lifts`), each approach and each detour (`clear_routes`)."""
+    way, grasp, release = entry.grasp_way, entry.grasp, entry.release
+    here, there = entry.confined_here, entry.confined_there
+    out_along, in_along = (-way.rotation[:, 2], -way.rotation[:, 2]) if way.name == SIDE else (toward, to_place)
+    routes = []
+    for lift in lifts(lift_m, size)[::-1] if here or there else _open_lifts(lift_m, over):
+        if way.name == SIDE:
+            approaches = _side_approaches(grasp)
+        else:
+            approaches = _approaches(shifted(grasp, lift * UP), keep_off, toward, True)
+        for approach in approaches:
+            for out, inward in _detours(here, there):
+                routes.append(Route(way, grasp, release, lift, tuple(approach), out * out_along, inward * in_along,
+                                    entry.rise))
+    return routes
 
 
 def _detours(here: bool, there: bool) -> list[tuple[float, float]]:
