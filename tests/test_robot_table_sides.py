@@ -40,7 +40,7 @@ def test_a_thing_within_the_front_s_reach_is_picked_from_the_front_first() -> No
     robot = _robot_at_table()
     table = robot.body.table_sides()
     assert table is not None
-    sides = [side for side, _ in robot.picks._sides(table, np.array([0.5, 0.0, 0.8]))]
+    sides = [side for side, _ in robot.picks.stands_and_spots.sides(table, np.array([0.5, 0.0, 0.8]))]
     assert sides[0] == FRONT and set(sides) == {FRONT, RIGHT, BACK}  # the left side is 1.18 m from it
 
 
@@ -50,11 +50,11 @@ def test_a_thing_at_the_table_s_back_is_tried_from_the_front_then_from_the_neare
     assert table is not None
     # 1.03 m from the front's line, tried from level with it there first (the arm may still reach
     # it); from the back, 0.43 m out; from the left, 0.48 m.
-    sides = robot.picks._sides(table, np.array([-0.5, 0.3, 0.8]))
+    sides = robot.picks.stands_and_spots.sides(table, np.array([-0.5, 0.3, 0.8]))
     assert [side for side, _ in sides] == [FRONT, BACK, LEFT]
     assert sides[0][1] == (pytest.approx(-0.5, abs=0.01), pytest.approx(-0.5, abs=0.01))
     # In storage, or with a part standing open: from the front alone, which storage opens to.
-    assert robot.picks._sides(table, np.array([-0.5, 0.3, 0.8]), front_only=True) == [
+    assert robot.picks.stands_and_spots.sides(table, np.array([-0.5, 0.3, 0.8]), front_only=True) == [
         (FRONT, (pytest.approx(-0.5, abs=0.01), pytest.approx(-0.5, abs=0.01)))]
     # Nowhere within reach (a table too deep all round): the front, level with the thing.
     robot = Robot(NoWorld())  # type: ignore[arg-type]
@@ -62,7 +62,7 @@ def test_a_thing_at_the_table_s_back_is_tried_from_the_front_then_from_the_neare
     _remember(robot, "table", (0.0, 0.0, 0.745), (2.4, 2.0, 0.02))
     deep = robot.body.table_sides()
     assert deep is not None
-    assert robot.picks._sides(deep, np.array([0.3, 0.0, 0.8])) == [(FRONT, (pytest.approx(0.3, abs=0.01), pytest.approx(0.3, abs=0.01)))]
+    assert robot.picks.stands_and_spots.sides(deep, np.array([0.3, 0.0, 0.8])) == [(FRONT, (pytest.approx(0.3, abs=0.01), pytest.approx(0.3, abs=0.01)))]
 
 
 def test_the_arm_comes_out_of_the_base_clear_only_where_nothing_stands_right_before_it(planner: ArmPlanner) -> None:
@@ -81,12 +81,12 @@ def test_a_stand_at_the_back_slides_along_to_where_the_arm_comes_out_clear_of_th
     table = robot.body.table_sides()
     assert table is not None
     level = float(table.local(BACK, np.array([[-0.1, 0.0]]))[0, 0])
-    along = robot.picks._clear_stand(table, BACK, level, level - 0.6, level + 0.6)
+    along = robot.picks.stands_and_spots.clear_stand(table, BACK, level, level - 0.6, level + 0.6)
     stand = table.stand(BACK, along)
     assert abs(stand.x - (-0.1)) > 0.2  # beside the chest, not before it
     assert unfold_problem(planner, stand, robot.body.points_near(())) is None
     with pytest.raises(Exception, match="no stand at the table's back"):
-        robot.picks._clear_stand(table, BACK, level, level - 0.05, level + 0.05)
+        robot.picks.stands_and_spots.clear_stand(table, BACK, level, level - 0.05, level + 0.05)
 
 
 def test_a_box_seen_whole_once_put_down_has_not_moved_but_one_pushed_aside_has() -> None:
