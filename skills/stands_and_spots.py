@@ -81,6 +81,15 @@ class StandsAndSpots:
         are tried after (a box 0.31 m wide 0.94 m out, its spots beside the lane, reached none:
         recursive 1064).
 
+        Args:
+            in_the_way: (N, 3) point sets kept clear from every side.
+            top: the thing's top grasp point where it stands.
+            radius: half the widest of its footprint (m).
+            table_top: the height of the surface it stands on (m).
+            in_storage: whether it stands under a board (`skills.arm.headroom.under_a_board`).
+            covers: whether it may cover another thing.
+            level: the stand level with it on the side it is picked from.
+
         Returns:
             One or two lists of (N, 3) point sets.
         """
@@ -107,7 +116,16 @@ class StandsAndSpots:
         open), the front alone: storage opens towards the front, and from the back a box in a
         cabinet stood 0.4 m out behind the cabinet's back; the robot driving round the table
         folded its arm into the handle of the door it had left open, and that door, come back to,
-        was not shut again (recursive 1243 of tuning-wide)."""
+        was not shut again (recursive 1243 of tuning-wide).
+
+        Args:
+            table: the table's sides, as seen from where the robot started.
+            top: the thing's top grasp point.
+            front_only: the front alone.
+
+        Returns:
+            (side, (lo, hi)) for each side in the order tried, (lo, hi) along its line.
+        """
         reaching = []
         for side in SIDES:
             (lo,), (hi,) = reach_along(table.local(side, top[:2]), table.line(side), PLACE_REACH_M)
@@ -129,6 +147,22 @@ class StandsAndSpots:
         where it started, at the front; elsewhere towards the side's line), beyond the strip before
         the robot's start that its head camera does not see, as close to level with the object as
         the spot allows.
+
+        Args:
+            obj: the thing to put down.
+            surface: what it stands on.
+            table: the table's sides.
+            side: the side to stand at (`skills.table_sides.SIDES`).
+            grasp_along: (lo, hi) along the side's line, from which the arm reaches the thing.
+            top: its top grasp point.
+            extent: its box (dx, dy, dz).
+            keep_clear: (N, 3) point sets a spot keeps clear of (`keep_clear_of`).
+            radius: half the widest of its footprint (m).
+            may_stack: whether it may go on top of a thing away where no place is free.
+
+        Returns:
+            The stand, and the spots (k, 3) (x, y, top z) that the arm reaches from it, nearest
+            first.
 
         Raises:
             SkillPlanError: no spot is free (the reason the surface gives).
@@ -163,6 +197,16 @@ class StandsAndSpots:
         `STAND_STEP_M`, where the arm comes out of the base clear of all that is remembered
         (`unfold_problem`). Not asked at the front, whose strip before the robot is kept clear for
         the arm; at the back the storage stands right before the base.
+
+        Args:
+            table: the table's sides.
+            side: the side whose line the base stands on.
+            level: the place along the line tried first (level with the thing).
+            lo: the low end of the stretch of the line searched.
+            hi: its high end.
+
+        Returns:
+            The place along the line.
 
         Raises:
             SkillPlanError: no such place.
